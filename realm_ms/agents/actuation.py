@@ -1,0 +1,113 @@
+"""Actuation stages: everything between the policy's joint command and the torque on the joints.
+
+The DROID controller (``droid_controller.py``) runs the Polymetis law on what the robot *measures*
+and hands the resulting torque through a chain of stages. The nominal robot has no stages; the
+sysid workbench's physical effects (friction, latency, encoder bias, payload, ...) are stages, so a
+fitted robot model plugs into the benchmark envs and the sysid replay simulator the same way.
+
+Hook order, every physics step (all tensors batched, shape (B, 7) unless noted)::
+
+    q_meas, qd_meas = measure(q, qd)          # what encoders report (bias, backlash, ...)
+    q_target        = command(q_target)        # what the controller tracks (latency, ...)
+    gains           = gains(nominal gains)     # the real loop's gains (mismatch)
+    tau             = polymetis_law(...)       # clipped to the nominal effort limits
+    tau             = actuator(tau)            # what the motors deliver (saturation, rate limit)
+    tau            += plant_torque()           # physics the rigid model lacks (friction)
+
+Build-time effects (armature, payload) act on the articulation once, in ``build``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import torch
+
+if TYPE_CHECKING:
+    from realm_ms.agents.arm_model import ArmModel
+    from realm_ms.agents.droid_controller import TorchGains
+
+
+@dataclass
+class ControlState:
+    """Per-physics-step state shared with every stage (true state, not measured)."""
+
+    q: torch.Tensor
+    qd: torch.Tensor
+    q_target: torch.Tensor  # after command stages
+    dt: float
+    model: "ArmModel"
+    time: torch.Tensor  # (B,) seconds since the env's reset
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class ActuationStage:
+    """Base class: every hook is the identity. Subclasses override what they change."""
+
+    def reset(self, num_envs: int, device: torch.device, env_idx: torch.Tensor | None, q: torch.Tensor) -> None:
+        """Clear internal state (delay lines, backlash position) for the envs in ``env_idx``."""
+
+    def build(self, articulation: Any, joint_indices: list[int]) -> None:
+        """Change the simulated articulation itself (armature, link masses). Called once after load."""
+
+    def measure(self, q: torch.Tensor, qd: torch.Tensor, state: ControlState) -> tuple[torch.Tensor, torch.Tensor]:
+        return q, qd
+
+    def command(self, q_target: torch.Tensor, state: ControlState) -> torch.Tensor:
+        return q_target
+
+    def gains(self, gains: "TorchGains") -> "TorchGains":
+        return gains
+
+    def actuator(self, tau: torch.Tensor, state: ControlState) -> torch.Tensor:
+        return tau
+
+    def plant_torque(self, state: ControlState) -> torch.Tensor | None:
+        return None
+
+
+class ActuationModel(ActuationStage):
+    """An ordered chain of stages that behaves as one stage."""
+
+    def __init__(self, stages: list[ActuationStage] | None = None):
+        self.stages = list(stages or [])
+
+    def __bool__(self) -> bool:
+        return bool(self.stages)
+
+    def reset(self, num_envs, device, env_idx, q):
+        for s in self.stages:
+            s.reset(num_envs, device, env_idx, q)
+
+    def build(self, articulation, joint_indices):
+        for s in self.stages:
+            s.build(articulation, joint_indices)
+
+    def measure(self, q, qd, state):
+        for s in self.stages:
+            q, qd = s.measure(q, qd, state)
+        return q, qd
+
+    def command(self, q_target, state):
+        for s in self.stages:
+            q_target = s.command(q_target, state)
+        return q_target
+
+    def gains(self, gains):
+        for s in self.stages:
+            gains = s.gains(gains)
+        return gains
+
+    def actuator(self, tau, state):
+        for s in self.stages:
+            tau = s.actuator(tau, state)
+        return tau
+
+    def plant_torque(self, state):
+        total = None
+        for s in self.stages:
+            t = s.plant_torque(state)
+            if t is not None:
+                total = t if total is None else total + t
+        return total

@@ -1,0 +1,276 @@
+"""Batched rigid-body model of a serial arm, parsed from a URDF: the robot's *own* model.
+
+This is what the real controller knows about the arm (libfranka's gravity model, Polymetis'
+pinocchio model): forward kinematics, the end-effector Jacobian, and inverse dynamics (RNEA) for
+gravity and Coriolis feed-forward. The physics engine simulates the *true* articulation; any
+difference between the two (a payload, a mis-modelled link) is a physical effect, which is exactly
+what the sysid workbench looks for.
+
+Everything is batched torch over a leading env dimension so physx_cpu and physx_cuda share one
+code path. RNEA is written in world coordinates with prefix/suffix sums instead of per-joint Python
+recursion: ~40 tensor ops per call regardless of the batch size.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+GRAVITY = (0.0, 0.0, -9.81)
+
+
+def _rpy_matrix(r: float, p: float, y: float) -> np.ndarray:
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _origin(elem: ET.Element | None) -> np.ndarray:
+    t = np.eye(4)
+    if elem is None:
+        return t
+    xyz = [float(v) for v in elem.get("xyz", "0 0 0").split()]
+    rpy = [float(v) for v in elem.get("rpy", "0 0 0").split()]
+    t[:3, :3] = _rpy_matrix(*rpy)
+    t[:3, 3] = xyz
+    return t
+
+
+@dataclass
+class _Inertial:
+    mass: float
+    com: np.ndarray  # (3,) in the link frame
+    inertia: np.ndarray  # (3,3) about the CoM, link-frame axes
+
+    @staticmethod
+    def parse(link: ET.Element) -> "_Inertial":
+        el = link.find("inertial")
+        if el is None:
+            return _Inertial(0.0, np.zeros(3), np.zeros((3, 3)))
+        o = _origin(el.find("origin"))
+        m = float(el.find("mass").get("value"))
+        i = el.find("inertia")
+        g = lambda k: float(i.get(k, 0.0))  # noqa: E731
+        inertia = np.array(
+            [[g("ixx"), g("ixy"), g("ixz")], [g("ixy"), g("iyy"), g("iyz")], [g("ixz"), g("iyz"), g("izz")]]
+        )
+        return _Inertial(m, o[:3, 3].copy(), o[:3, :3] @ inertia @ o[:3, :3].T)
+
+    def transformed(self, t: np.ndarray) -> "_Inertial":
+        """Same body expressed in a parent frame, t = T_parent_link."""
+        return _Inertial(self.mass, t[:3, :3] @ self.com + t[:3, 3], t[:3, :3] @ self.inertia @ t[:3, :3].T)
+
+    @staticmethod
+    def merge(parts: list["_Inertial"]) -> "_Inertial":
+        m = sum(p.mass for p in parts)
+        if m <= 0:
+            return _Inertial(0.0, np.zeros(3), np.zeros((3, 3)))
+        c = sum(p.mass * p.com for p in parts) / m
+        inertia = np.zeros((3, 3))
+        for p in parts:  # parallel-axis theorem
+            d = p.com - c
+            inertia += p.inertia + p.mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+        return _Inertial(m, c, inertia)
+
+
+class ArmModel:
+    """Serial chain from ``base_link`` to ``tip_link`` with revolute joints.
+
+    Links hanging off the chain (the gripper, cameras) are lumped rigidly into the chain link they
+    are attached to, at their zero configuration, as a robot vendor's model of a mounted end
+    effector would be.
+    """
+
+    def __init__(
+        self,
+        joint_names: list[str],
+        origins: np.ndarray,
+        axes: np.ndarray,
+        inertials: list[_Inertial],
+        tip_offset: np.ndarray,
+        q_limits: np.ndarray,
+        effort_limits: np.ndarray,
+        device: torch.device | str = "cpu",
+        dtype: torch.dtype = torch.float32,
+    ):
+        self.joint_names = joint_names
+        self.dof = len(joint_names)
+        self.q_limits = q_limits
+        self.effort_limits = effort_limits
+        self._np = dict(origins=origins, axes=axes, inertials=inertials, tip_offset=tip_offset)
+        self.to(device, dtype)
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_urdf(cls, urdf: str | Path, base_link: str, tip_link: str, **kw) -> "ArmModel":
+        root = ET.parse(str(urdf)).getroot()
+        links = {l.get("name"): l for l in root.findall("link")}
+        joints = root.findall("joint")
+        child_joint = {j.find("child").get("link"): j for j in joints}
+        children: dict[str, list[ET.Element]] = {}
+        for j in joints:
+            children.setdefault(j.find("parent").get("link"), []).append(j)
+
+        # chain joints, walking up from the tip
+        chain: list[ET.Element] = []
+        link = tip_link
+        while link != base_link:
+            if link not in child_joint:
+                raise ValueError(f"{tip_link!r} is not below {base_link!r} in {urdf}")
+            j = child_joint[link]
+            chain.insert(0, j)
+            link = j.find("parent").get("link")
+        moving = [j for j in chain if j.get("type") in ("revolute", "continuous")]
+        if any(j.get("type") == "prismatic" for j in chain):
+            raise ValueError("prismatic joints on the arm chain are not supported")
+
+        # Body i (i = 0..n-1) is everything rigidly attached after moving joint i, expressed in the
+        # frame of that joint (after rotation). Fixed joints on the chain are folded into origins.
+        chain_links = [base_link] + [j.find("child").get("link") for j in chain]
+        moving_idx = {id(j): k for k, j in enumerate(moving)}
+
+        def subtree(link_name: str, t: np.ndarray, out: list[_Inertial]) -> None:
+            out.append(_Inertial.parse(links[link_name]).transformed(t))
+            for j in children.get(link_name, []):
+                c = j.find("child").get("link")
+                if c in chain_links and id(child_joint[c]) in moving_idx:
+                    continue  # next moving body starts here
+                if c in chain_links:  # fixed joint on the chain
+                    subtree(c, t @ _origin(j.find("origin")), out)
+                else:  # side branch: lumped at zero configuration
+                    subtree(c, t @ _origin(j.find("origin")), out)
+
+        origins, axes, inertials = [], [], []
+        pending = np.eye(4)  # fixed transforms accumulated since the previous moving joint
+        for j in chain:
+            o = _origin(j.find("origin"))
+            if j.get("type") == "fixed":
+                pending = pending @ o
+                continue
+            origins.append(pending @ o)
+            axes.append(np.array([float(v) for v in (j.find("axis").get("xyz") if j.find("axis") is not None else "1 0 0").split()]))
+            pending = np.eye(4)
+            parts: list[_Inertial] = []
+            subtree(j.find("child").get("link"), np.eye(4), parts)
+            inertials.append(_Inertial.merge(parts))
+        tip_offset = pending  # fixed transform from the last moving body to the tip link
+        lim = np.array([[float(j.find("limit").get("lower")), float(j.find("limit").get("upper"))] for j in moving])
+        eff = np.array([float(j.find("limit").get("effort")) for j in moving])
+        return cls([j.get("name") for j in moving], np.stack(origins), np.stack(axes), inertials, tip_offset, lim, eff, **kw)
+
+    def to(self, device=None, dtype=None) -> "ArmModel":
+        device = torch.device(device) if device is not None else self.device
+        dtype = dtype or self.dtype
+        self.device, self.dtype = device, dtype
+        t = lambda a: torch.as_tensor(np.asarray(a), device=device, dtype=dtype)  # noqa: E731
+        n = self._np
+        self.origins = t(n["origins"])  # (n,4,4) parent body frame -> joint frame at q=0
+        self.axes = t(n["axes"] / np.linalg.norm(n["axes"], axis=1, keepdims=True))  # (n,3) in joint frame
+        self.masses = t([i.mass for i in n["inertials"]])  # (n,)
+        self.coms = t(np.stack([i.com for i in n["inertials"]]))  # (n,3) body frame
+        self.inertias = t(np.stack([i.inertia for i in n["inertials"]]))  # (n,3,3) body frame, about CoM
+        self.tip_offset = t(n["tip_offset"])
+        self.gravity = t(GRAVITY)
+        # Rodrigues pieces for rotation about each (unit) joint axis
+        a = self.axes
+        k = torch.zeros(self.dof, 3, 3, device=device, dtype=dtype)
+        k[:, 0, 1], k[:, 0, 2], k[:, 1, 0] = -a[:, 2], a[:, 1], a[:, 2]
+        k[:, 1, 2], k[:, 2, 0], k[:, 2, 1] = -a[:, 0], -a[:, 1], a[:, 0]
+        self._K, self._K2 = k, k @ k
+        return self
+
+    # ------------------------------------------------------------------ kinematics
+    def link_frames(self, q: torch.Tensor) -> torch.Tensor:
+        """World (base) transforms of the n moving bodies, shape (B, n, 4, 4)."""
+        s, c = torch.sin(q)[..., None, None], torch.cos(q)[..., None, None]
+        rot = torch.eye(3, device=q.device, dtype=q.dtype) + s * self._K + (1 - c) * self._K2  # (B,n,3,3)
+        local = self.origins.expand(q.shape[0], -1, -1, -1).clone()
+        local[..., :3, :3] = local[..., :3, :3] @ rot
+        frames = []
+        t = local[:, 0]
+        frames.append(t)
+        for i in range(1, self.dof):
+            t = t @ local[:, i]
+            frames.append(t)
+        return torch.stack(frames, dim=1)
+
+    def fk(self, q: torch.Tensor, frames: torch.Tensor | None = None) -> torch.Tensor:
+        """Tip pose (B, 4, 4) in the base frame."""
+        frames = self.link_frames(q) if frames is None else frames
+        return frames[:, -1] @ self.tip_offset
+
+    def jacobian(self, q: torch.Tensor, frames: torch.Tensor | None = None) -> torch.Tensor:
+        """Geometric Jacobian of the tip (B, 6, n): rows [linear velocity; angular velocity], base frame."""
+        frames = self.link_frames(q) if frames is None else frames
+        z = (frames[..., :3, :3] @ self.axes[..., None])[..., 0]  # (B,n,3)
+        p = frames[..., :3, 3]
+        tip = (frames[:, -1] @ self.tip_offset)[:, None, :3, 3]
+        return torch.cat([torch.linalg.cross(z, tip - p, dim=-1), z], dim=-1).transpose(1, 2)
+
+    # ------------------------------------------------------------------ dynamics
+    def rnea(
+        self,
+        q: torch.Tensor,
+        qd: torch.Tensor,
+        qdd: torch.Tensor | None = None,
+        gravity: bool = True,
+        frames: torch.Tensor | None = None,
+    ) -> torch.Tensor:
+        """Inverse dynamics tau = M(q) qdd + C(q, qd) qd + g(q), batched (B, n)."""
+        frames = self.link_frames(q) if frames is None else frames
+        rot, p = frames[..., :3, :3], frames[..., :3, 3]  # (B,n,3,3), (B,n,3)
+        z = (rot @ self.axes[..., None])[..., 0]
+        cross = torch.linalg.cross
+        w_rel = z * qd[..., None]
+        w = torch.cumsum(w_rel, dim=1)  # angular velocity of body i
+        w_prev = w - w_rel
+        dw_terms = cross(w_prev, w_rel, dim=-1)
+        if qdd is not None:
+            dw_terms = dw_terms + z * qdd[..., None]
+        dw = torch.cumsum(dw_terms, dim=1)
+        # linear acceleration of each body's origin: base accel (-g for gravity) + rigid transport
+        d = torch.diff(p, dim=1)  # p_i - p_{i-1}, i >= 1
+        dw_prev, w_prev_body = dw[:, :-1], w[:, :-1]
+        trans = cross(dw_prev, d, dim=-1) + cross(w_prev_body, cross(w_prev_body, d, dim=-1), dim=-1)
+        a0 = (-self.gravity if gravity else torch.zeros_like(self.gravity)).expand(q.shape[0], 1, 3)
+        a = torch.cumsum(torch.cat([a0, trans], dim=1), dim=1)
+        r = (rot @ self.coms[..., None])[..., 0]  # CoM offset in world axes
+        ac = a + cross(dw, r, dim=-1) + cross(w, cross(w, r, dim=-1), dim=-1)
+        f = self.masses[:, None] * ac  # (B,n,3)
+        inertia_w = rot @ self.inertias @ rot.transpose(-1, -2)
+        iw = (inertia_w @ w[..., None])[..., 0]
+        nn = (inertia_w @ dw[..., None])[..., 0] + cross(w, iw, dim=-1)
+        c = p + r
+        # suffix sums: force/moment of all bodies beyond joint i, moments about p_i
+        rev = lambda x: torch.flip(torch.cumsum(torch.flip(x, [1]), 1), [1])  # noqa: E731
+        f_sum = rev(f)
+        moment = rev(nn + cross(c, f, dim=-1)) - cross(p, f_sum, dim=-1)
+        return (z * moment).sum(-1)
+
+    def gravity_torque(self, q: torch.Tensor) -> torch.Tensor:
+        return self.rnea(q, torch.zeros_like(q))
+
+    def bias_torque(self, q: torch.Tensor, qd: torch.Tensor, frames: torch.Tensor | None = None) -> torch.Tensor:
+        """Coriolis/centrifugal + gravity, C(q, qd) qd + g(q)."""
+        return self.rnea(q, qd, frames=frames)
+
+    def coriolis_torque(self, q: torch.Tensor, qd: torch.Tensor) -> torch.Tensor:
+        return self.rnea(q, qd, gravity=False)
+
+    def mass_matrix(self, q: torch.Tensor) -> torch.Tensor:
+        """M(q), (B, n, n), one batched RNEA over the n unit accelerations."""
+        b, n = q.shape
+        qn = q.repeat_interleave(n, 0)
+        eye = torch.eye(n, device=q.device, dtype=q.dtype).repeat(b, 1)
+        cols = self.rnea(qn, torch.zeros_like(qn), eye, gravity=False)
+        return cols.view(b, n, n).transpose(1, 2)

@@ -1,0 +1,323 @@
+"""The DROID arm controller: Polymetis ``HybridJointImpedanceControl`` computed every physics step.
+
+    tau = (Kq + J^T Kx J)(q* - q) - (Kqd + J^T Kxd J) qd + C(q, qd) qd + g(q)
+
+with J the flange Jacobian, C and g from the robot's own model (``ArmModel``; libfranka compensates
+gravity on the real robot, so the simulated arm keeps gravity and the controller cancels it with
+its model), and the torque clipped to the Franka limits (87 / 12 N.m).
+
+Numerics: at 120 Hz an explicit damping torque on the light wrist is unstable (h*Kd/I > 2 for
+joint 7 with the gripper, I ~ 6e-3 kg.m^2). The diagonal damping is therefore carried by PhysX's
+*implicit* joint drive (stiffness 0, damping d_i), and the explicit torque is corrected by the
+drive's first-order estimate (+d_i qd) so the total equals the law above; only the integrator
+changes. ``implicit_damping=False`` gives the purely explicit law (stable only at >= ~1 kHz).
+
+``DroidArmDriver`` is the backend-free core (batched torch); ``DroidJointImpedanceController`` binds
+it to a ManiSkill articulation (physx_cpu and physx_cuda). The sysid replay simulator binds the same
+driver to its own articulations, so an identified model is the model the benchmark runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Sequence
+
+import numpy as np
+import torch
+from gymnasium import spaces
+from mani_skill.agents.controllers.base_controller import BaseController, ControllerConfig
+
+from realm_ms.agents.actuation import ActuationModel, ControlState
+from realm_ms.agents.arm_model import ArmModel
+
+ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
+FRANKA_EFFORT_LIMITS = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
+
+
+# ---------------------------------------------------------------------------- gains and presets
+@dataclass(frozen=True)
+class ImpedanceGains:
+    """Polymetis hybrid joint impedance gains (joint: N.m/rad, N.m.s/rad; Cartesian: N/m, N.m/rad)."""
+
+    kq: tuple[float, ...]
+    kqd: tuple[float, ...]
+    kx: tuple[float, ...]
+    kxd: tuple[float, ...]
+
+    def scaled(self, stiffness: float = 1.0, damping: float = 1.0) -> "ImpedanceGains":
+        s = lambda v, k: tuple(float(x) * k for x in v)  # noqa: E731
+        return ImpedanceGains(s(self.kq, stiffness), s(self.kqd, damping), s(self.kx, stiffness), s(self.kxd, damping))
+
+
+GAIN_PRESETS: dict[str, ImpedanceGains] = {
+    # fairo franka_hardware.yaml since 2022-08-09 (commit 2de742c): what current DROID sites run
+    "polymetis": ImpedanceGains((40, 30, 50, 25, 35, 25, 10), (4, 6, 5, 5, 3, 2, 1), (750,) * 3 + (15,) * 3, (37,) * 3 + (2,) * 3),
+    # REALM's aligned control (realm/config/robots/franka_robotiq.yaml): Kq4 = 35, Kx = 400
+    "realm": ImpedanceGains((40, 30, 50, 35, 35, 25, 10), (4, 6, 5, 5, 3, 2, 1), (400,) * 3 + (15,) * 3, (37,) * 3 + (2,) * 3),
+    # fairo 2022-02 .. 2022-08
+    "polymetis_2022_02": ImpedanceGains((80, 120, 100, 100, 70, 50, 20), (10, 10, 10, 10, 5, 5, 5), (150,) * 3 + (10,) * 3, (25,) * 3 + (7,) * 3),
+}
+
+
+@dataclass(frozen=True)
+class JointPhysics:
+    """Joint physics beyond the rigid URDF: smooth Coulomb ``friction`` in N.m (applied by the
+    driver as an explicit torque) and rotor ``armature`` in kg.m^2 (an articulation property).
+
+    REALM's friction numbers were PhysX joint-friction coefficients. In SAPIEN's PhysX that
+    coefficient is unitless and load-proportional; applied literally it locks the wrist (a 0.3 rad
+    step leaves 0.28 rad of error on joint 5, see docs/robot.md). Read as N.m they match the
+    Franka's measured Coulomb friction (0.1-0.7 N.m, Gaz et al. 2019), which is how we apply them.
+    """
+
+    friction: tuple[float, ...]
+    armature: tuple[float, ...]
+    friction_velocity: float = 0.02  # rad/s, tanh smoothing of sgn(qd)
+
+
+JOINT_PHYSICS_PRESETS: dict[str, JointPhysics] = {
+    # REALM's identified values (realm_environment_dynamic.py; later DROID.yaml), friction as N.m
+    "realm": JointPhysics((0.05, 0.10, 0.05, 0.10, 0.75, 0.425, 0.20), (0.25, 0.50, 0.25, 0.50, 0.25, 0.15, 0.0)),
+    # the rigid URDF alone: the sysid workbench's baseline, every effect is then explicit
+    "none": JointPhysics((0.0,) * 7, (0.0,) * 7),
+}
+
+
+def resolve(preset_or_value, presets: dict, what: str):
+    if isinstance(preset_or_value, str):
+        if preset_or_value not in presets:
+            raise ValueError(f"unknown {what} preset {preset_or_value!r}; choose one of {sorted(presets)}")
+        return presets[preset_or_value]
+    return preset_or_value
+
+
+@dataclass
+class TorchGains:
+    """Gains as batched tensors (B, 7) / (B, 6), so each env may run different gains (sysid)."""
+
+    kq: torch.Tensor
+    kqd: torch.Tensor
+    kx: torch.Tensor
+    kxd: torch.Tensor
+
+    @classmethod
+    def from_gains(cls, g: ImpedanceGains, num_envs: int, device, dtype=torch.float32) -> "TorchGains":
+        t = lambda v: torch.as_tensor(v, device=device, dtype=dtype).expand(num_envs, -1).clone()  # noqa: E731
+        return cls(t(g.kq), t(g.kqd), t(g.kx), t(g.kxd))
+
+    def map(self, fn) -> "TorchGains":
+        return TorchGains(fn(self.kq), fn(self.kqd), fn(self.kx), fn(self.kxd))
+
+
+def limit_dissipative(tau: torch.Tensor, qd: torch.Tensor, inertia: torch.Tensor, dt: float) -> torch.Tensor:
+    """Clamp a torque that opposes motion so it can at most stop the joint within one step.
+
+    Explicit friction with a steep slope at qd = 0 is unstable on light joints (h * slope / I > 2);
+    bounding it by the impulse I |qd| / h keeps it dissipative. ``inertia`` must not exceed the
+    joint's true effective inertia (use a lower bound).
+    """
+    cap = inertia * qd.abs() / dt
+    return torch.clamp(tau, -cap, cap)
+
+
+def impedance_torque(
+    q: torch.Tensor, qd: torch.Tensor, q_target: torch.Tensor, gains: TorchGains, jac: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Stiffness/damping part of the hybrid law; returns (tau, effective damping matrix)."""
+    jt = jac.transpose(1, 2)
+    kp = torch.diag_embed(gains.kq) + jt @ (gains.kx[..., None] * jac)
+    kd = torch.diag_embed(gains.kqd) + jt @ (gains.kxd[..., None] * jac)
+    tau = (kp @ (q_target - q)[..., None] - kd @ qd[..., None])[..., 0]
+    return tau, kd
+
+
+# ---------------------------------------------------------------------------- backend-free core
+@dataclass
+class DroidControlConfig:
+    gains: ImpedanceGains | str = "polymetis"
+    effort_limits: tuple[float, ...] = FRANKA_EFFORT_LIMITS
+    coriolis_feedforward: bool = True  # on in Polymetis and (via a YAML slip) in REALM
+    gravity_compensation: bool = True  # libfranka compensates gravity with its model
+    implicit_damping: bool = True  # see module docstring
+    # damping carried implicitly, N.m.s/rad per joint; None = the law's diagonal at ``reference_qpos``
+    implicit_damping_values: tuple[float, ...] | None = None
+    reference_qpos: tuple[float, ...] = (0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0)
+    joint_physics: JointPhysics | str = "realm"
+
+
+class DroidArmDriver:
+    """Polymetis law + actuation stages for B arms; knows nothing about the simulator."""
+
+    def __init__(
+        self,
+        model: ArmModel,
+        config: DroidControlConfig,
+        num_envs: int,
+        device: torch.device | str = "cpu",
+        actuation: ActuationModel | None = None,
+    ):
+        self.model = model.to(device)
+        self.config = config
+        self.num_envs = num_envs
+        self.device = torch.device(device)
+        self.actuation = actuation or ActuationModel()
+        gains = resolve(config.gains, GAIN_PRESETS, "gain")
+        self.gains = TorchGains.from_gains(gains, num_envs, self.device)
+        self.effort_limits = torch.as_tensor(config.effort_limits, device=self.device, dtype=torch.float32)
+        self.implicit_damping = self._implicit_damping(gains)
+        self.joint_physics = resolve(config.joint_physics, JOINT_PHYSICS_PRESETS, "joint physics")
+        t = lambda v: torch.as_tensor(v, device=self.device, dtype=torch.float32)  # noqa: E731
+        self.friction = t(self.joint_physics.friction)
+        self.armature = t(self.joint_physics.armature)
+        # lower bound of each joint's effective inertia, for the friction limiter
+        ref = t(config.reference_qpos)[None]
+        self.inertia_lower_bound = 0.5 * torch.diagonal(self.model.mass_matrix(ref)[0]) + self.armature
+        self.q_target = torch.zeros(num_envs, model.dof, device=self.device)
+        self.time = torch.zeros(num_envs, device=self.device)
+        self.last_torque = torch.zeros(num_envs, model.dof, device=self.device)  # what the joints received
+
+    def _implicit_damping(self, gains: ImpedanceGains) -> torch.Tensor:
+        if not self.config.implicit_damping:
+            return torch.zeros(self.model.dof, device=self.device)
+        if self.config.implicit_damping_values is not None:
+            return torch.as_tensor(self.config.implicit_damping_values, device=self.device, dtype=torch.float32)
+        q = torch.as_tensor(self.config.reference_qpos, device=self.device, dtype=torch.float32)[None]
+        g = TorchGains.from_gains(gains, 1, self.device)
+        _, kd = impedance_torque(q, q * 0, q, g, self.model.jacobian(q))
+        return torch.diagonal(kd[0]).clone()
+
+    def reset(self, q: torch.Tensor, env_idx: torch.Tensor | None = None) -> None:
+        """Hold the current pose in the envs being reset."""
+        idx = slice(None) if env_idx is None else env_idx
+        self.q_target[idx] = q[idx, : self.model.dof]
+        self.time[idx] = 0.0
+        self.last_torque[idx] = 0.0
+        self.actuation.reset(self.num_envs, self.device, env_idx, q[:, : self.model.dof])
+
+    def set_target(self, q_target: torch.Tensor) -> None:
+        self.q_target = q_target.to(self.device, torch.float32)
+
+    def torque(self, q: torch.Tensor, qd: torch.Tensor, dt: float) -> torch.Tensor:
+        """Explicit joint torque to apply this physics step (the implicit drive adds the rest)."""
+        state = ControlState(q=q, qd=qd, q_target=self.q_target, dt=dt, model=self.model, time=self.time)
+        act = self.actuation
+        q_m, qd_m = act.measure(q, qd, state) if act else (q, qd)
+        q_t = act.command(self.q_target, state) if act else self.q_target
+        state.q_target = q_t
+        gains = act.gains(self.gains) if act else self.gains
+        frames = self.model.link_frames(q_m)
+        tau, _ = impedance_torque(q_m, qd_m, q_t, gains, self.model.jacobian(q_m, frames))
+        if self.config.coriolis_feedforward or self.config.gravity_compensation:
+            if self.config.coriolis_feedforward and self.config.gravity_compensation:
+                tau = tau + self.model.bias_torque(q_m, qd_m, frames)
+            elif self.config.gravity_compensation:
+                tau = tau + self.model.rnea(q_m, torch.zeros_like(qd_m), frames=frames)
+            else:
+                tau = tau + self.model.rnea(q_m, qd_m, gravity=False, frames=frames)
+        tau = torch.clamp(tau, -self.effort_limits, self.effort_limits)
+        # joint friction is physics, not command: it acts on the true velocity after the clip
+        friction = -self.friction * torch.tanh(qd / self.joint_physics.friction_velocity)
+        tau = tau + limit_dissipative(friction, qd, self.inertia_lower_bound, dt)
+        if act:
+            tau = act.actuator(tau, state)
+            plant = act.plant_torque(state)
+            if plant is not None:
+                tau = tau + plant
+        self.last_torque = tau
+        self.time = self.time + dt
+        # the implicit drive will apply about -d*qd; pre-compensate so the total matches the law
+        return tau + self.implicit_damping * qd
+
+
+def configure_arm_joints(joints_per_arm_joint, driver: DroidArmDriver) -> None:
+    """Set the PhysX side of the driver's contract on SAPIEN joints: a zero-stiffness drive carrying
+    the implicit damping, the armature, and no PhysX friction (the driver applies friction in N.m).
+    ``joints_per_arm_joint[i]`` is a list of ``PhysxArticulationJoint`` for arm joint i (one per env).
+    """
+    damping = driver.implicit_damping.cpu().numpy()
+    armature = driver.armature.cpu().numpy()
+    for i, objs in enumerate(joints_per_arm_joint):
+        for j in objs:
+            j.set_drive_properties(0.0, float(damping[i]), force_limit=1e6, mode="force")
+            j.set_friction(0.0)
+            j.set_armature([float(armature[i])])
+
+
+# ---------------------------------------------------------------------------- ManiSkill binding
+@dataclass
+class DroidJointImpedanceControllerConfig(ControllerConfig):
+    joint_names: Sequence[str] = ARM_JOINTS
+    model_factory: object = None  # () -> ArmModel; set by the agent
+    control: DroidControlConfig = field(default_factory=DroidControlConfig)
+    clip_to_joint_limits: bool = True
+    normalize_action: bool = False
+    controller_cls = None  # set below
+
+
+class DroidJointImpedanceController(BaseController):
+    """8 physics substeps per 15 Hz action; absolute joint targets (rad) as the action."""
+
+    config: DroidJointImpedanceControllerConfig
+    sets_target_qpos = False
+    sets_target_qvel = False
+
+    def __init__(self, config, articulation, control_freq, sim_freq=None, scene=None):
+        super().__init__(config, articulation, control_freq, sim_freq, scene)
+        self._dt = 1.0 / (self._sim_steps * control_freq)
+        self.actuation = ActuationModel()
+        self.driver = DroidArmDriver(config.model_factory(), config.control, scene.num_envs, self.device, self.actuation)
+        self._idx = self.active_joint_indices
+        self._zero_qf = None
+
+    def _initialize_action_space(self):
+        limits = self.articulation.get_qlimits()[0, self.active_joint_indices].cpu().numpy()
+        self.single_action_space = spaces.Box(limits[:, 0], limits[:, 1], dtype=np.float32)
+
+    def set_robot_model(self, actuation: ActuationModel) -> None:
+        """Install an identified robot model's actuation stages (see ``realm_ms.sysid``)."""
+        self.actuation.stages = list(actuation.stages)
+        self.driver.actuation = self.actuation
+
+    def set_drive_property(self):
+        configure_arm_joints([joint._objs for joint in self.joints], self.driver)
+        if not self.scene._gpu_sim_initialized:
+            for link in self.articulation.links:
+                link.disable_gravity = False  # the controller compensates gravity like libfranka
+
+    def reset(self):
+        mask = self.scene._reset_mask
+        env_idx = None if bool(mask.all()) else torch.nonzero(mask)[:, 0]
+        self.driver.reset(self.qpos, env_idx)
+
+    def set_action(self, action):
+        action = self._preprocess_action(action)
+        if self.config.clip_to_joint_limits:
+            lo = torch.as_tensor(self.single_action_space.low, device=action.device)
+            hi = torch.as_tensor(self.single_action_space.high, device=action.device)
+            action = torch.maximum(torch.minimum(action, hi), lo)
+        self.driver.set_target(action)
+
+    def before_simulation_step(self):
+        if self.scene.gpu_sim_enabled:
+            px = self.scene.px
+            px.gpu_fetch_articulation_qpos()
+            px.gpu_fetch_articulation_qvel()
+            tau = self.driver.torque(self.qpos, self.qvel, self._dt)
+            px.cuda_articulation_qf.torch()[self.articulation._data_index[:, None], self._idx[None]] = tau
+            px.gpu_apply_articulation_qf()
+        else:
+            obj = self.articulation._objs[0]
+            q, qd = torch.from_numpy(obj.qpos[None]), torch.from_numpy(obj.qvel[None])
+            tau = self.driver.torque(q[:, self._idx], qd[:, self._idx], self._dt)
+            qf = np.zeros(obj.dof, dtype=np.float32)
+            qf[self._idx.cpu().numpy()] = tau[0].numpy()
+            obj.qf = qf
+
+    def get_state(self) -> dict:
+        return {"target_qpos": self.driver.q_target}
+
+    def set_state(self, state: dict):
+        self.driver.set_target(state["target_qpos"])
+
+
+DroidJointImpedanceControllerConfig.controller_cls = DroidJointImpedanceController

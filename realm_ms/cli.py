@@ -1,0 +1,57 @@
+"""`realm` command line: one entry point, one subcommand module per area.
+
+Each module listed in ``COMMANDS`` exposes ``add_parser(subparsers)`` which registers its
+subcommand(s) and sets ``func`` on the parsed namespace. Modules keep heavy imports (torch,
+sapien, mani_skill) inside their handlers so ``realm --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# subcommand name -> module providing add_parser(); later areas append here.
+COMMANDS: dict[str, str] = {
+    "demo": "realm_ms.demo",
+    "sysid": "realm_ms.sysid.cli",
+    "assets": "realm_ms.assets.cli",
+}
+
+
+class UserError(Exception):
+    """Bad input from the user: printed as one clear message, never as a traceback."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="realm", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, module in COMMANDS.items():
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as e:
+            if e.name and e.name.startswith(module.rsplit(".", 1)[0]):
+                continue  # area not installed in this checkout
+            raise
+        mod.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except UserError as e:
+        print(f"realm {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted; partial results are kept where the command writes incrementally", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

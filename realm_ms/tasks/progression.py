@@ -1,0 +1,193 @@
+"""REALM's tiered progression: ordered stages per skill, latched per env, batched torch.
+
+Progression = (number of consecutive stages met) / (number of stages); a met stage latches, so
+progression is monotone within an episode. Thresholds are REALM's (realm-spec.md section 2.2),
+with the original's pitfalls fixed (section 10):
+
+- GRASP is a real two-pad grasp (both pads in contact with non-trivial force), not the original's
+  always-true finger test;
+- TOUCH_AND_MOVE_JOINT requires the drawer to have moved in the task's direction by more than
+  0.025 of its range (the original's open-task condition was true at rest);
+- REACH for drawers uses the handle like every other task uses its object (distance < 0.10 m or
+  touching), instead of the original's dead touch-only branch;
+- PLACE_INTO / PLACE_ONTO are geometric (footprint + height band + contact), not sim object states.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Callable
+
+import torch
+
+
+class Stage(str, enum.Enum):
+    REACH = "REACH"
+    GRASP = "GRASP"
+    TOUCH = "TOUCH"
+    LIFT_SLIGHT = "LIFT_SLIGHT"
+    LIFT_LARGE = "LIFT_LARGE"
+    ROTATED = "ROTATED"
+    MOVE_CLOSE = "MOVE_CLOSE"
+    PLACE_INTO = "PLACE_INTO"
+    PLACE_ONTO = "PLACE_ONTO"
+    TOGGLED_ON = "TOGGLED_ON"
+    TOUCH_AND_MOVE_JOINT = "TOUCH_AND_MOVE_JOINT"
+    OPEN_JOINT_SMALL = "OPEN_JOINT_SMALL"
+    OPEN_JOINT_LARGE = "OPEN_JOINT_LARGE"
+    OPEN_JOINT_FULL = "OPEN_JOINT_FULL"
+    CLOSE_JOINT_SMALL = "CLOSE_JOINT_SMALL"
+    CLOSE_JOINT_LARGE = "CLOSE_JOINT_LARGE"
+    CLOSE_JOINT_FULL = "CLOSE_JOINT_FULL"
+
+
+S = Stage
+RUBRICS: dict[str, tuple[Stage, ...]] = {
+    "put": (S.REACH, S.GRASP, S.LIFT_SLIGHT, S.MOVE_CLOSE, S.PLACE_INTO),
+    "stack": (S.REACH, S.GRASP, S.LIFT_SLIGHT, S.MOVE_CLOSE, S.PLACE_ONTO),
+    "pick": (S.REACH, S.GRASP, S.LIFT_LARGE),
+    "rotate": (S.REACH, S.GRASP, S.ROTATED),
+    "push": (S.REACH, S.TOUCH, S.TOGGLED_ON),
+    "open_drawer": (S.REACH, S.TOUCH_AND_MOVE_JOINT, S.OPEN_JOINT_SMALL, S.OPEN_JOINT_LARGE, S.OPEN_JOINT_FULL),
+    "close_drawer": (S.REACH, S.TOUCH_AND_MOVE_JOINT, S.CLOSE_JOINT_SMALL, S.CLOSE_JOINT_LARGE, S.CLOSE_JOINT_FULL),
+}
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    reach_dist: float = 0.10  # m, object origin to either inner finger pad
+    lift_slight_dz: float = 0.01
+    lift_slight_dist: float = 0.05
+    lift_large_dz: float = 0.075
+    lift_large_dist: float = 0.10
+    move_close_dist: float = 0.125
+    rotated_angle: float = 1.1  # rad about the vertical axis
+    joint_move: float = 0.025  # fraction of the joint range
+    open_fractions: tuple[float, float, float] = (0.125, 0.65, 0.95)
+    close_fractions: tuple[float, float, float] = (0.875, 0.35, 0.05)
+
+
+@dataclass
+class StageInputs:
+    """Batched quantities the predicates read; the env fills what its skill needs (B = num_envs)."""
+
+    obj_pos: torch.Tensor  # (B,3) main object (or drawer handle / switch) origin
+    obj_pos0: torch.Tensor  # (B,3) reference captured after settling
+    finger_pos: torch.Tensor  # (B,2,3) inner finger pads
+    touching: torch.Tensor  # (B,) robot touches the main object
+    grasped: torch.Tensor  # (B,) real two-pad grasp
+    obj_quat: torch.Tensor | None = None  # (B,4) wxyz
+    obj_quat0: torch.Tensor | None = None
+    target_pos: torch.Tensor | None = None  # (B,3)
+    placed_into: torch.Tensor | None = None  # (B,) geometric inside-check
+    placed_onto: torch.Tensor | None = None  # (B,) geometric on-top-check
+    toggled: torch.Tensor | None = None  # (B,) switch state
+    openness: torch.Tensor | None = None  # (B,) drawer opening in [0,1]
+    openness0: torch.Tensor | None = None
+    extra: dict = field(default_factory=dict)
+
+
+def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
+    w, x, y, z = q.unbind(-1)
+    return torch.stack(
+        [
+            1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+            2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+            2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
+        ],
+        -1,
+    ).view(*q.shape[:-1], 3, 3)
+
+
+def rotation_vector_z(quat: torch.Tensor, quat0: torch.Tensor) -> torch.Tensor:
+    """z-component of the rotation vector of R_now * R_0^-1 (REALM's ROTATED measure, not Euler yaw)."""
+    r = quat_to_matrix(quat) @ quat_to_matrix(quat0).transpose(-1, -2)
+    cos = ((r.diagonal(dim1=-2, dim2=-1).sum(-1) - 1) / 2).clamp(-1, 1)
+    angle = torch.acos(cos)
+    axis_z = r[..., 1, 0] - r[..., 0, 1]
+    sin = torch.sin(angle)
+    small = sin.abs() < 1e-6
+    # near 0 or pi the axis formula degenerates: fall back to the diagonal-based axis
+    kz = torch.where(small, torch.sqrt(((r[..., 2, 2] + 1) / 2).clamp(min=0)), axis_z / (2 * sin.clamp(min=1e-6)))
+    return angle * kz
+
+
+def _lift(x: StageInputs, dz: float, dist: float) -> torch.Tensor:
+    d = x.obj_pos - x.obj_pos0
+    return (d[:, 2] > dz) & (d.norm(dim=-1) > dist)
+
+
+def _moved(x: StageInputs, t: Thresholds, opening: bool) -> torch.Tensor:
+    delta = x.openness - x.openness0
+    return x.touching & ((delta > t.joint_move) if opening else (-delta > t.joint_move))
+
+
+Predicate = Callable[[StageInputs, Thresholds], torch.Tensor]
+PREDICATES: dict[Stage, Predicate] = {
+    S.REACH: lambda x, t: ((x.finger_pos - x.obj_pos[:, None]).norm(dim=-1) < t.reach_dist).any(-1) | x.touching,
+    S.GRASP: lambda x, t: x.grasped,
+    S.TOUCH: lambda x, t: x.touching,
+    S.LIFT_SLIGHT: lambda x, t: _lift(x, t.lift_slight_dz, t.lift_slight_dist),
+    S.LIFT_LARGE: lambda x, t: _lift(x, t.lift_large_dz, t.lift_large_dist),
+    S.ROTATED: lambda x, t: rotation_vector_z(x.obj_quat, x.obj_quat0).abs() > t.rotated_angle,
+    S.MOVE_CLOSE: lambda x, t: (x.obj_pos - x.target_pos).norm(dim=-1) < t.move_close_dist,
+    S.PLACE_INTO: lambda x, t: x.placed_into & ~x.grasped,
+    S.PLACE_ONTO: lambda x, t: x.placed_onto & ~x.grasped,
+    S.TOGGLED_ON: lambda x, t: x.toggled,
+    S.TOUCH_AND_MOVE_JOINT: lambda x, t: _moved(x, t, opening=x.extra.get("opening", True)),
+    S.OPEN_JOINT_SMALL: lambda x, t: x.openness > t.open_fractions[0],
+    S.OPEN_JOINT_LARGE: lambda x, t: x.openness > t.open_fractions[1],
+    S.OPEN_JOINT_FULL: lambda x, t: x.openness > t.open_fractions[2],
+    S.CLOSE_JOINT_SMALL: lambda x, t: x.openness < t.close_fractions[0],
+    S.CLOSE_JOINT_LARGE: lambda x, t: x.openness < t.close_fractions[1],
+    S.CLOSE_JOINT_FULL: lambda x, t: x.openness < t.close_fractions[2],
+}
+
+
+class ProgressionTracker:
+    """Latched per-env stage state for one rubric."""
+
+    def __init__(self, skill: str, num_envs: int, device, thresholds: Thresholds = Thresholds()):
+        if skill not in RUBRICS:
+            raise ValueError(f"unknown skill {skill!r}; known: {sorted(RUBRICS)}")
+        self.skill = skill
+        self.stages = RUBRICS[skill]
+        self.thresholds = thresholds
+        self.met = torch.zeros(num_envs, len(self.stages), dtype=torch.bool, device=device)
+
+    def reset(self, env_idx: torch.Tensor | None = None) -> None:
+        if env_idx is None:
+            self.met[:] = False
+        else:
+            self.met[env_idx] = False
+
+    def evaluate_stages(self, x: StageInputs) -> torch.Tensor:
+        """Unlatched predicate values (B, N), for unit tests and diagnostics."""
+        return torch.stack([PREDICATES[s](x, self.thresholds) for s in self.stages], dim=1)
+
+    def update(self, x: StageInputs) -> torch.Tensor:
+        """Latch newly met stages in order; returns progression (B,) in [0, 1]."""
+        now = self.evaluate_stages(x)
+        for k in range(len(self.stages)):
+            prior = self.met[:, :k].all(dim=1) if k else torch.ones_like(self.met[:, 0])
+            self.met[:, k] |= prior & now[:, k]
+        return self.progression
+
+    @property
+    def progression(self) -> torch.Tensor:
+        return self.met.sum(dim=1).float() / len(self.stages)
+
+    @property
+    def success(self) -> torch.Tensor:
+        return self.met.all(dim=1)
+
+    def stalled_stage(self) -> list[str]:
+        """Name of the first unmet stage per env ("DONE" when complete), for failure reports."""
+        n = self.met.sum(dim=1).tolist()
+        return [self.stages[k].value if k < len(self.stages) else "DONE" for k in n]
+
+    def info(self) -> dict[str, torch.Tensor]:
+        out = {f"stage_{s.value.lower()}": self.met[:, k] for k, s in enumerate(self.stages)}
+        out["stalled_stage_index"] = self.met.sum(dim=1)
+        return out

@@ -1,0 +1,17 @@
+"""Household tabletop scenes. One file per scene; every scene implements ``TabletopScene``.
+
+Frame convention: the robot base is the world origin, x forward, z up; the table top is at
+``table_top_z`` and extends in +x in front of the robot. Tasks place objects in their spawn region
+(robot base frame), so one task can run in any scene.
+"""
+
+from __future__ import annotations
+
+from realm_ms.tasks.scenes.base import SCENES, TabletopScene, register_scene  # noqa: F401
+from realm_ms.tasks.scenes import studio  # noqa: F401  (registers its scenes)
+
+
+def get_scene(name: str) -> TabletopScene:
+    if name not in SCENES:
+        raise ValueError(f"unknown scene {name!r}; available: {sorted(SCENES)}")
+    return SCENES[name]

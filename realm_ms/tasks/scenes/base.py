@@ -1,0 +1,49 @@
+"""The scene interface and small builders shared by scenes (boxes with materials, textures)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import sapien
+
+SCENES: dict[str, "TabletopScene"] = {}
+
+
+def register_scene(scene: "TabletopScene") -> "TabletopScene":
+    if scene.name in SCENES:
+        raise ValueError(f"scene {scene.name!r} registered twice")
+    SCENES[scene.name] = scene
+    return scene
+
+
+def material(rgba, roughness: float = 0.7, metallic: float = 0.0) -> sapien.render.RenderMaterial:
+    return sapien.render.RenderMaterial(base_color=list(rgba), roughness=roughness, metallic=metallic)
+
+
+def add_box(builder, half_size, pose: sapien.Pose, mat, collision: bool = True) -> None:
+    if collision:
+        builder.add_box_collision(pose=pose, half_size=list(half_size))
+    builder.add_box_visual(pose=pose, half_size=list(half_size), material=mat)
+
+
+@dataclass(frozen=True)
+class TabletopScene:
+    """Static surroundings of a task: floor, walls, table, furniture, lights."""
+
+    name: str
+    table_top_z: float = 0.0
+    table_half_size: tuple[float, float, float] = (0.45, 0.75, 0.02)  # x, y, thickness/2
+    table_center_xy: tuple[float, float] = (0.62, 0.0)
+    robot_stand_height: float = 0.76  # pedestal under the robot base, down to the floor
+
+    @property
+    def floor_z(self) -> float:
+        return self.table_top_z - self.robot_stand_height
+
+    def build(self, env) -> None:
+        """Add static actors to ``env.scene`` (all sub-scenes)."""
+        raise NotImplementedError
+
+    def load_lighting(self, env) -> None:
+        raise NotImplementedError
