@@ -77,6 +77,7 @@ if ENV_ID not in REGISTERED_ENVS:
             self.cube_half = 0.02  # which cube is placed at cube_xyz; the others are parked far away
             self.arm_qpos = ARM_REST.copy()
             self.cube_xyz = np.array([GRASP_X, 5.0, 0.02])
+            self.wall_xyz = np.array([GRASP_X, -5.0, 0.015])
             super().__init__(*args, robot_uids=robot_uids, **kwargs)
 
         @property
@@ -105,6 +106,11 @@ if ENV_ID not in REGISTERED_ENVS:
                 b.add_box_collision(half_size=[h, h, h], density=500)
                 b.initial_pose = sapien.Pose([GRASP_X, 5.0 + i, h])
                 self.cubes[h] = b.build(name=f"cube_{int(2000 * h)}mm")
+            # an immovable 3 x 1.2 x 3 cm plate (kinematic) for the one-pad test
+            b = self.scene.create_actor_builder()
+            b.add_box_collision(half_size=[0.015, 0.006, 0.015])
+            b.initial_pose = sapien.Pose([GRASP_X, -5.0, 0.015])
+            self.wall = b.build_kinematic(name="wall")
 
         def _initialize_episode(self, env_idx, options: dict):
             q = np.concatenate([self.arm_qpos, np.zeros(6)])
@@ -116,6 +122,7 @@ if ENV_ID not in REGISTERED_ENVS:
                 cube.set_linear_velocity(torch.zeros(1, 3))
                 cube.set_angular_velocity(torch.zeros(1, 3))
             self.cube = self.cubes[self.cube_half]
+            self.wall.set_pose(Pose.create_from_pq(p=np.asarray(self.wall_xyz, dtype=np.float32)[None]))
 
         def evaluate(self):
             return {}
@@ -159,10 +166,11 @@ def _gripper_idx(robot, names):
     return [robot.active_joints_map[n].active_index[0].item() for n in names]
 
 
-def _reset(u, arm_q, cube_xyz=None, cube_half=0.02):
+def _reset(u, arm_q, cube_xyz=None, cube_half=0.02, wall_xyz=None):
     """Reset with the arm at ``arm_q`` (gripper open) and the cube of half size ``cube_half`` at
-    ``cube_xyz`` (default: far away)."""
+    ``cube_xyz`` (default: far away), the fixed block at ``wall_xyz`` (default: far away)."""
     u.arm_qpos = np.asarray(arm_q)
+    u.wall_xyz = np.array(wall_xyz if wall_xyz is not None else [GRASP_X, -5.0, 0.015])
     u.cube_half = cube_half
     u.cube_xyz = np.array(cube_xyz if cube_xyz is not None else [GRASP_X, 5.0, cube_half])
     u.reset(seed=0)
@@ -241,6 +249,7 @@ def test_tcp_and_camera_frames():
     loader = scene.create_urdf_loader()
     loader.fix_root_link = True
     robot = loader.load(str(panda_droid_urdf_path()))
+    robot.set_qpos(np.zeros(13))  # computes the link poses
     lm = {l.name: l for l in robot.get_links()}
     t = lm["panda_link8"].entity_pose.inv() * lm["tcp"].entity_pose
     assert np.allclose(t.p, [0, 0, 0.1558], atol=1e-5)
@@ -327,6 +336,14 @@ def test_grasp_lift_carry_cube(env, half):
     assert rq.two_pad_grasp(env.scene, robot, cube).item()
     pos_closed = _pos(env)
     assert 0.2 < pos_closed < 0.9  # stopped by the cube
+    # the loop closures hold under grip load: per side q_inner_knuckle = q_driver = -q_inner_finger
+    q = robot.get_qpos()[0]
+    for side in ("left", "right"):
+        qd, qk, qf = (q[robot.active_joints_map[f"{side}_{n}_joint"].active_index[0]].item()
+                      for n in ("outer_knuckle", "inner_knuckle", "inner_finger"))
+        assert abs(qk - qd) < 0.02 and abs(qf + qd) < 0.035, (side, qd, qk, qf)  # < 2 deg pad tilt
+    # the measured width matches the cube
+    assert rq.gripper_width(q, robot=robot).item() == pytest.approx(2 * half, abs=0.004)
     fl = env.scene.get_pairwise_contact_forces(rq.pad_links(robot)[0], cube).norm().item()
     fr = env.scene.get_pairwise_contact_forces(rq.pad_links(robot)[1], cube).norm().item()
     assert 20 < fl < 235 and 20 < fr < 235, (fl, fr)  # 2F-85 grip-force range
@@ -347,18 +364,19 @@ def test_grasp_lift_carry_cube(env, half):
 
 
 def test_two_pad_grasp_false_with_one_pad(env):
-    # cube off-centre along the closing axis: only the right pad (+y) pushes it, the left pad never touches
-    _reset(env, env.q_grasp, cube_xyz=[GRASP_X, 0.035, 0.02])
+    # a fixed plate just inside the right pad (world -y, the gripper points down): the right pad
+    # presses on it with full force, the left pad closes completely without touching it
+    _reset(env, env.q_grasp, wall_xyz=[GRASP_X, -0.036, 0.025])
     robot = env.agent.robot
-    _step(env, env.q_grasp, 0.0, n=3)
-    seen_one_pad = False
-    for _ in range(10):
-        _step(env, env.q_grasp, 0.35, n=1)
-        fl = env.scene.get_pairwise_contact_forces(rq.pad_links(robot)[0], env.cube).norm().item()
-        fr = env.scene.get_pairwise_contact_forces(rq.pad_links(robot)[1], env.cube).norm().item()
-        seen_one_pad |= (fr > 1.0) and (fl < 1e-6)
-        assert not rq.two_pad_grasp(env.scene, robot, env.cube).item()
-    assert seen_one_pad
+    left, right = rq.pad_links(robot)
+    _step(env, env.q_grasp, 0.0, n=2)
+    assert not rq.two_pad_grasp(env.scene, robot, env.wall).item()
+    _step(env, env.q_grasp, 1.0, n=12)
+    fl = env.scene.get_pairwise_contact_forces(left, env.wall).norm().item()
+    fr = env.scene.get_pairwise_contact_forces(right, env.wall).norm().item()
+    assert fr > 20 and fl == 0.0, (fl, fr)
+    assert not rq.two_pad_grasp(env.scene, robot, env.wall).item()
+    assert not rq.two_pad_grasp(env.scene, robot, env.wall, min_force=0.0).item()
 
 
 def test_controller_binarize_and_position_helpers():

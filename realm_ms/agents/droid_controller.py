@@ -120,17 +120,6 @@ def limit_dissipative(tau: torch.Tensor, qd: torch.Tensor, inertia: torch.Tensor
     return torch.clamp(tau, -cap, cap)
 
 
-def impedance_torque(
-    q: torch.Tensor, qd: torch.Tensor, q_target: torch.Tensor, gains: TorchGains, jac: torch.Tensor
-) -> tuple[torch.Tensor, torch.Tensor]:
-    """Stiffness/damping part of the hybrid law; returns (tau, effective damping matrix)."""
-    jt = jac.transpose(1, 2)
-    kp = torch.diag_embed(gains.kq) + jt @ (gains.kx[..., None] * jac)
-    kd = torch.diag_embed(gains.kqd) + jt @ (gains.kxd[..., None] * jac)
-    tau = (kp @ (q_target - q)[..., None] - kd @ qd[..., None])[..., 0]
-    return tau, kd
-
-
 # ---------------------------------------------------------------------------- backend-free core
 @dataclass
 class DroidControlConfig:
@@ -143,6 +132,10 @@ class DroidControlConfig:
     implicit_damping_values: tuple[float, ...] | None = None
     reference_qpos: tuple[float, ...] = (0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0)
     joint_physics: JointPhysics | str = "realm"
+    # "physics": J, C(q, qd) and g(q) from the model every physics step (as Polymetis at 1 kHz).
+    # "control": refreshed once per control step, gravity corrected to first order in between;
+    # the feedback on q, qd still runs every physics step. Faster on CPU; see bench/step_rate.py.
+    model_rate: str = "physics"
 
 
 class DroidArmDriver:
@@ -160,7 +153,7 @@ class DroidArmDriver:
         self.config = config
         self.num_envs = num_envs
         self.device = torch.device(device)
-        self.actuation = actuation or ActuationModel()
+        self.actuation = actuation if actuation is not None else ActuationModel()
         gains = resolve(config.gains, GAIN_PRESETS, "gain")
         self.gains = TorchGains.from_gains(gains, num_envs, self.device)
         self.effort_limits = torch.as_tensor(config.effort_limits, device=self.device, dtype=torch.float32)
@@ -173,8 +166,12 @@ class DroidArmDriver:
         ref = t(config.reference_qpos)[None]
         self.inertia_lower_bound = 0.5 * torch.diagonal(self.model.mass_matrix(ref)[0]) + self.armature
         self.q_target = torch.zeros(num_envs, model.dof, device=self.device)
+        self._terms = None  # cached (kp, kd, bias, q_ref, dg/dq) for model_rate="control"
+        if config.model_rate not in ("physics", "control"):
+            raise ValueError(f"model_rate must be 'physics' or 'control', got {config.model_rate!r}")
         self.time = torch.zeros(num_envs, device=self.device)
-        self.last_torque = torch.zeros(num_envs, model.dof, device=self.device)  # what the joints received
+        self.motor_torque = torch.zeros(num_envs, model.dof, device=self.device)  # commanded after limits/actuator
+        self.applied_torque = torch.zeros(num_envs, model.dof, device=self.device)  # + joint friction and plant effects
 
     def _implicit_damping(self, gains: ImpedanceGains) -> torch.Tensor:
         if not self.config.implicit_damping:
@@ -183,7 +180,7 @@ class DroidArmDriver:
             return torch.as_tensor(self.config.implicit_damping_values, device=self.device, dtype=torch.float32)
         q = torch.as_tensor(self.config.reference_qpos, device=self.device, dtype=torch.float32)[None]
         g = TorchGains.from_gains(gains, 1, self.device)
-        _, kd = impedance_torque(q, q * 0, q, g, self.model.jacobian(q))
+        _, kd, _ = self._law_terms(q, torch.zeros_like(q), g)
         return torch.diagonal(kd[0]).clone()
 
     def reset(self, q: torch.Tensor, env_idx: torch.Tensor | None = None) -> None:
@@ -191,11 +188,40 @@ class DroidArmDriver:
         idx = slice(None) if env_idx is None else env_idx
         self.q_target[idx] = q[idx, : self.model.dof]
         self.time[idx] = 0.0
-        self.last_torque[idx] = 0.0
+        self._terms = None
+        self.motor_torque[idx] = 0.0
+        self.applied_torque[idx] = 0.0
         self.actuation.reset(self.num_envs, self.device, env_idx, q[:, : self.model.dof])
 
     def set_target(self, q_target: torch.Tensor) -> None:
         self.q_target = q_target.to(self.device, torch.float32)
+        self._terms = None  # model_rate="control": refresh J, C, g at the first physics step
+
+    def _bias(self, q: torch.Tensor, qd: torch.Tensor, frames: torch.Tensor) -> torch.Tensor:
+        """Feed-forward from the robot's model: Coriolis and/or gravity, as configured."""
+        cfg = self.config
+        if not (cfg.coriolis_feedforward or cfg.gravity_compensation):
+            return torch.zeros_like(q)
+        return self.model.rnea(q, qd if cfg.coriolis_feedforward else torch.zeros_like(qd), gravity=cfg.gravity_compensation, frames=frames)
+
+    def _law_terms(self, q: torch.Tensor, qd: torch.Tensor, gains: TorchGains):
+        """Stiffness and damping matrices and the feed-forward at configuration q: (kp, kd, bias)."""
+        frames = self.model.link_frames(q)
+        jac = self.model.jacobian(q, frames)
+        jt = jac.transpose(1, 2)
+        kp = torch.diag_embed(gains.kq) + jt @ (gains.kx[..., None] * jac)
+        kd = torch.diag_embed(gains.kqd) + jt @ (gains.kxd[..., None] * jac)
+        return kp, kd, self._bias(q, qd, frames)
+
+    def _gravity_jacobian(self, q: torch.Tensor, eps: float = 1e-3) -> torch.Tensor:
+        """d g / d q (B, n, n) by central differences, one batched RNEA."""
+        if not self.config.gravity_compensation:
+            return torch.zeros(q.shape[0], q.shape[1], q.shape[1], device=q.device)
+        n = q.shape[1]
+        d = eps * torch.eye(n, device=q.device)
+        qs = torch.cat([(q[:, None] + d).reshape(-1, n), (q[:, None] - d).reshape(-1, n)])
+        g = self.model.rnea(qs, torch.zeros_like(qs)).view(2, q.shape[0], n, n)
+        return ((g[0] - g[1]) / (2 * eps)).transpose(1, 2)
 
     def torque(self, q: torch.Tensor, qd: torch.Tensor, dt: float) -> torch.Tensor:
         """Explicit joint torque to apply this physics step (the implicit drive adds the rest)."""
@@ -204,26 +230,27 @@ class DroidArmDriver:
         q_m, qd_m = act.measure(q, qd, state) if act else (q, qd)
         q_t = act.command(self.q_target, state) if act else self.q_target
         state.q_target = q_t
-        gains = act.gains(self.gains) if act else self.gains
-        frames = self.model.link_frames(q_m)
-        tau, _ = impedance_torque(q_m, qd_m, q_t, gains, self.model.jacobian(q_m, frames))
-        if self.config.coriolis_feedforward or self.config.gravity_compensation:
-            if self.config.coriolis_feedforward and self.config.gravity_compensation:
-                tau = tau + self.model.bias_torque(q_m, qd_m, frames)
-            elif self.config.gravity_compensation:
-                tau = tau + self.model.rnea(q_m, torch.zeros_like(qd_m), frames=frames)
-            else:
-                tau = tau + self.model.rnea(q_m, qd_m, gravity=False, frames=frames)
+        if self.config.model_rate == "physics" or self._terms is None:
+            gains = act.gains(self.gains) if act else self.gains
+            kp, kd, bias = self._law_terms(q_m, qd_m, gains)
+            if self.config.model_rate == "control":
+                self._terms = (kp, kd, bias, q_m.clone(), self._gravity_jacobian(q_m))
+        if self.config.model_rate == "control":
+            kp, kd, bias, q_ref, dg = self._terms
+            bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]  # first-order gravity between refreshes
+        tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
         tau = torch.clamp(tau, -self.effort_limits, self.effort_limits)
-        # joint friction is physics, not command: it acts on the true velocity after the clip
+        if act:
+            tau = act.actuator(tau, state)
+        self.motor_torque = tau
+        # joint friction is physics, not command: it acts on the true velocity
         friction = -self.friction * torch.tanh(qd / self.joint_physics.friction_velocity)
         tau = tau + limit_dissipative(friction, qd, self.inertia_lower_bound, dt)
         if act:
-            tau = act.actuator(tau, state)
             plant = act.plant_torque(state)
             if plant is not None:
                 tau = tau + plant
-        self.last_torque = tau
+        self.applied_torque = tau
         self.time = self.time + dt
         # the implicit drive will apply about -d*qd; pre-compensate so the total matches the law
         return tau + self.implicit_damping * qd

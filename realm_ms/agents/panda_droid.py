@@ -32,6 +32,8 @@ from realm_ms.agents.droid_controller import (
     DroidControlConfig,
     DroidJointImpedanceControllerConfig,
 )
+from realm_ms.contacts import any_contact
+from realm_ms.rendering import shader_config
 from realm_ms.agents.urdf import CAMERA_LINK, FLANGE_LINK, TCP_LINK, panda_droid_urdf_path
 
 DROID_RESET_ARM_QPOS = (0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0)
@@ -106,12 +108,18 @@ class PandaDroid(BaseAgent):
         model.build(self.robot, arm.active_joint_indices.tolist())
 
     # ------------------------------------------------------------------ sensors
+    # (width, height, shader pack) of the wrist camera; envs set it before sensors are created
+    wrist_camera: tuple[int, int, str] = (320, 180, "default")
+
     @property
     def _sensor_configs(self):
-        w, h = 320, 180
+        w, h, shader = self.wrist_camera
         fovy = 2 * np.arctan(np.tan(np.deg2rad(WRIST_HFOV_DEG) / 2) * h / w)
         return [
-            CameraConfig("wrist", pose=sapien.Pose(), width=w, height=h, fov=fovy, near=0.01, far=10.0, mount=self.robot.links_map[CAMERA_LINK])
+            CameraConfig(
+                "wrist", pose=sapien.Pose(), width=w, height=h, fov=fovy, near=0.01, far=10.0,
+                mount=self.robot.links_map[CAMERA_LINK], shader_config=shader_config(shader),
+            )
         ]
 
     # ------------------------------------------------------------------ loading hooks
@@ -160,12 +168,7 @@ class PandaDroid(BaseAgent):
 
     def is_touching(self, entities) -> torch.Tensor:
         """Any gripper link in contact with any of ``entities`` (actors or links)."""
-        hit = torch.zeros(self.scene.num_envs, dtype=torch.bool, device=self.device)
-        for e in entities:
-            for link in self.gripper_links:
-                f = self.scene.get_pairwise_contact_forces(link, e)
-                hit |= f.norm(dim=-1) > 1e-3
-        return hit
+        return any_contact(self.scene, self.gripper_links, list(entities))
 
     def is_grasping(self, object=None, min_force: float = 1.0) -> torch.Tensor:
         """Real two-pad grasp: both pads press on the object with >= ``min_force`` N, opposing."""

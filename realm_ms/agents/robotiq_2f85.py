@@ -1,6 +1,6 @@
 """Robotiq 2F-85 for the ``panda_droid`` agent: linkage closure, controller, observation, grasp test.
 
-Kinematics (see ``assets/robotiq_2f85.urdf.in`` and ``docs/robot.md``): per side a 4-bar
+Kinematics (see ``assets/robotiq_2f85_template.urdf`` and ``docs/robot.md``): per side a 4-bar
 parallelogram. The outer knuckle (driver) is actuated; the outer finger (coupler) is rigid on it;
 the inner finger (follower, carrying the pad) and the inner knuckle (spring link) are passive.
 The URDF is a tree; :func:`add_loop_closures` closes each loop at runtime with a PhysX drive whose
@@ -15,9 +15,10 @@ Actuation model: the drivers are PD position drives (target = command * 0.8 rad)
 saturates at ``force_limit`` (an effort limit per driver). Free motion is damping-limited
 (speed ~ force_limit / damping), and on contact the error is large, so each pad presses with the
 saturated torque: F_pad ~ force_limit / (L cos(phi)) with L = 57.5 mm the parallelogram crank,
-i.e. ~18-19 N per N.m. Defaults (:data:`GRIPPER_FORCE_LIMIT` = 4 N.m, ~70-75 N per pad on a
-3-5 cm object, inside the real 20-235 N range; full stroke ~0.6 s, the real 2F-85 does
-0.57 s at 150 mm/s) are measured in ``tests/test_gripper.py`` and ``docs/robot.md``.
+i.e. ~16-18 N per N.m. Defaults: :data:`GRIPPER_FORCE_LIMIT` = 4 N.m -> 62-73 N per pad measured
+on 3-5 cm cubes (real 2F-85: 20-235 N); the driver target is rate-limited to
+:data:`GRIPPER_MAX_SPEED` -> full stroke in 0.58 s (real 2F-85: 0.57 s at 150 mm/s). See
+``docs/robot.md`` and ``tests/test_gripper.py``.
 """
 
 from __future__ import annotations
@@ -54,11 +55,13 @@ __all__ = [
     "GRIPPER_FORCE_LIMIT",
     "GRIPPER_MAX_SPEED",
     "GRIPPER_FRICTION",
+    "GRIPPER_ARMATURE",
     "GRIPPER_COLLISION_BIT",
     "RobotiqGripperController",
     "RobotiqGripperControllerConfig",
     "add_loop_closures",
     "disable_gripper_self_collisions",
+    "set_gripper_armature",
     "gripper_controller_configs",
     "gripper_position",
     "gripper_width",
@@ -139,6 +142,12 @@ GRIPPER_MAX_SPEED = 0.8 / 0.6  # rad/s of the driver target: full stroke in 0.6 
 GRIPPER_STIFFNESS = 400.0  # N.m/rad -> torque saturates for errors > 0.01 rad
 GRIPPER_DAMPING = 5.0  # N.m.s/rad
 GRIPPER_FRICTION = 0.0
+#: joint-space armature (kg.m^2) on all 6 gripper joints. The linkage links weigh 3.5-22 g while the
+#: loop closure carries ~100 N at full grip force; without armature PhysX's iterative solver lets
+#: the closure slip by 5-10 deg at 15 position iterations (pads tilt, inner fingers hit their
+#: limits). 0.01 keeps the pads parallel within ~1 deg at the default 15 iterations; it is also a
+#: plausible reflected inertia of the 2F-85 worm-gear drive.
+GRIPPER_ARMATURE = 0.01
 GRIPPER_COLLISION_BIT = 31
 
 
@@ -157,8 +166,15 @@ def _links_map(robot) -> dict:
     return {l.name: l for l in robot.get_links()}  # sapien.physx.PhysxArticulation
 
 
-def add_loop_closures(agent_or_scene, robot=None, disable_self_collisions: bool = True) -> list:
-    """Close both 4-bar loops of the 2F-85 (and by default disable intra-gripper collisions).
+def add_loop_closures(
+    agent_or_scene,
+    robot=None,
+    disable_self_collisions: bool = True,
+    armature: Optional[float] = GRIPPER_ARMATURE,
+) -> list:
+    """Close both 4-bar loops of the 2F-85; by default also disable intra-gripper collisions
+    (:func:`disable_gripper_self_collisions`) and set the gripper joint armature
+    (:data:`GRIPPER_ARMATURE`, needed for a stiff closure; ``None`` leaves it alone).
 
     ``add_loop_closures(agent)`` with a ManiSkill ``BaseAgent`` (call it in
     ``_after_loading_articulation``), or ``add_loop_closures(scene, robot)`` with a ManiSkill
@@ -183,7 +199,20 @@ def add_loop_closures(agent_or_scene, robot=None, disable_self_collisions: bool 
         drives.append(d)
     if disable_self_collisions:
         disable_gripper_self_collisions(robot)
+    if armature is not None:
+        set_gripper_armature(robot, armature)
     return drives
+
+
+def set_gripper_armature(robot, armature: float = GRIPPER_ARMATURE) -> None:
+    """Set the joint armature of the 6 gripper joints (before GPU init, e.g. in
+    ``_after_loading_articulation``)."""
+    if hasattr(robot, "active_joints_map"):  # ManiSkill Articulation: one physx joint per sub-scene
+        joints = [j for n in GRIPPER_JOINTS for j in robot.active_joints_map[n]._objs]
+    else:
+        joints = [j for j in robot.get_active_joints() if j.name in GRIPPER_JOINTS]
+    for j in joints:
+        j.set_armature(np.full(1, armature, dtype=np.float32))
 
 
 def disable_gripper_self_collisions(
@@ -391,9 +420,10 @@ def two_pad_grasp(
     net force >= ``min_force`` N each, each force within ``max_angle`` degrees of that pad's
     outward normal (the object pushes the pad open, i.e. +y of the pad frame; friction that carries
     the object's weight tilts it), and the two forces opposing each other (angle > 90 deg)."""
+    from realm_ms.contacts import pairwise_forces
+
     left, right = pad_links(robot)
-    f_l = scene.get_pairwise_contact_forces(left, actor)
-    f_r = scene.get_pairwise_contact_forces(right, actor)
+    f_l, f_r = pairwise_forces(scene, [(left, actor), (right, actor)])
     # outward normal of each pad = +y of its frame (the object pushes the pad open)
     out_l = left.pose.to_transformation_matrix()[..., :3, 1]
     out_r = right.pose.to_transformation_matrix()[..., :3, 1]

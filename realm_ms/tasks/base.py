@@ -22,6 +22,9 @@ from mani_skill.utils import sapien_utils
 from mani_skill.utils.structs.pose import Pose
 from mani_skill.utils.structs.types import GPUMemoryConfig, SceneConfig, SimConfig
 
+from realm_ms.agents.droid_controller import DroidControlConfig
+from realm_ms.agents.panda_droid import PandaDroid
+from realm_ms.rendering import shader_config
 from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
 from realm_ms.tasks.scenes import get_scene
@@ -54,6 +57,7 @@ class RealmEnv(BaseEnv):
         settle_steps: int = 5,
         success_tail: int = 15,
         robot_model: Any = None,
+        droid_control: dict | DroidControlConfig | None = None,
         thresholds: Thresholds = Thresholds(),
         **kwargs,
     ):
@@ -65,6 +69,11 @@ class RealmEnv(BaseEnv):
         self.robot_model = robot_model
         self.thresholds = thresholds
         self.instruction = self.task_spec.instruction
+        if droid_control is not None:  # e.g. dict(gains="realm", model_rate="control")
+            if robot_uids != PandaDroid.uid:
+                raise ValueError("droid_control configures the panda_droid agent only")
+            cfg = droid_control if isinstance(droid_control, DroidControlConfig) else DroidControlConfig(**droid_control)
+            robot_uids = type("PandaDroidConfigured", (PandaDroid,), {"droid_control": cfg})
         super().__init__(*args, robot_uids=robot_uids, **kwargs)
 
     # ------------------------------------------------------------------ configuration
@@ -81,7 +90,10 @@ class RealmEnv(BaseEnv):
     def _camera_config(self, cam: CameraSpec, size: tuple[int, int], shader: str) -> CameraConfig:
         w, h = size
         pose = sapien_utils.look_at(eye=list(cam.eye), target=list(cam.target))
-        return CameraConfig(cam.uid, pose=pose, width=w, height=h, fov=vertical_fov(cam.hfov_deg, w, h), near=0.01, far=10.0, shader_pack=shader)
+        return CameraConfig(
+            cam.uid, pose=pose, width=w, height=h, fov=vertical_fov(cam.hfov_deg, w, h), near=0.01, far=10.0,
+            shader_config=shader_config(shader),
+        )
 
     @property
     def _default_sensor_configs(self):
@@ -98,6 +110,7 @@ class RealmEnv(BaseEnv):
     # ------------------------------------------------------------------ loading
     def _load_agent(self, options: dict):
         super()._load_agent(options, sapien.Pose(p=[0, 0, self.scene_def.table_top_z]))
+        self.agent.wrist_camera = (*self.camera_size, self.shader)
         if self.robot_model is not None:
             self.agent.set_robot_model(self.robot_model)
 

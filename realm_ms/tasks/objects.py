@@ -15,6 +15,7 @@ import sapien
 import torch
 from mani_skill.utils.structs.pose import Pose
 
+from realm_ms.contacts import any_contact
 from realm_ms.tasks.progression import quat_to_matrix
 from realm_ms.tasks.spec import SceneObject
 
@@ -108,7 +109,7 @@ class RigidTaskObject(TaskObject):
         half = torch.as_tensor(self.extents[:2] / 2, device=local.device, dtype=local.dtype)
         on_xy = (local[:, :2].abs() < half).all(dim=1)
         on_z = (local[:, 2] - float(self.extents[2])).abs() < tol
-        touching = scene.get_pairwise_contact_forces(self.entity, other.entity).norm(dim=-1) > 1e-3
+        touching = any_contact(scene, [self.entity], [other.entity])
         return on_xy & on_z & touching
 
     def _to_local(self, p_world: torch.Tensor) -> torch.Tensor:

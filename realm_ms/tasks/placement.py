@@ -29,22 +29,36 @@ def sample_placements(
     yaw = np.zeros((b, k))
     order = np.argsort(-np.asarray(radii), kind="stable")
     for e, rng in enumerate(rngs):
-        placed: list[int] = []
-        for i in order:
-            x0, x1, y0, y1 = regions[i]
-            r = radii[i]
-            lo = np.array([x0 + r, y0 + r])
-            hi = np.array([max(x1 - r, x0 + r), max(y1 - r, y0 + r)])
-            for _ in range(MAX_TRIES):
-                p = lo + (hi - lo) * rng.uniform(0, 1, size=2)
-                if all(np.linalg.norm(p - xy[e, j]) >= r + radii[j] + min_separation for j in placed):
-                    break
-            else:
-                raise PlacementError(
-                    f"could not place object {i} (radius {r:.3f} m) without collision in region {regions[i]} after "
-                    f"{MAX_TRIES} tries; enlarge the spawn region or use fewer/smaller objects"
-                )
-            xy[e, i] = p
-            placed.append(i)
-            yaw[e, i] = rng.uniform(*yaw_ranges[i])
+        for restart in range(MAX_RESTARTS + 1):
+            # greedy placement can corner itself (a large object in the middle); start the layout over
+            if _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, last=restart == MAX_RESTARTS):
+                break
     return xy, yaw
+
+
+MAX_RESTARTS = 20
+
+
+def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, last: bool) -> bool:
+    placed: list[int] = []
+    tries = MAX_TRIES if last else MAX_TRIES // 10
+    for i in order:
+        x0, x1, y0, y1 = regions[i]
+        r = radii[i]
+        lo = np.array([x0 + r, y0 + r])
+        hi = np.array([max(x1 - r, x0 + r), max(y1 - r, y0 + r)])
+        for _ in range(tries):
+            p = lo + (hi - lo) * rng.uniform(0, 1, size=2)
+            if all(np.linalg.norm(p - xy[e, j]) >= r + radii[j] + min_separation for j in placed):
+                break
+        else:
+            if not last:
+                return False
+            raise PlacementError(
+                f"could not place object {i} (radius {r:.3f} m) without collision in region {regions[i]} after "
+                f"{MAX_RESTARTS} restarts; enlarge the spawn region or use fewer/smaller objects"
+            )
+        xy[e, i] = p
+        placed.append(i)
+        yaw[e, i] = rng.uniform(*yaw_ranges[i])
+    return True

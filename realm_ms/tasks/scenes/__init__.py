@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from realm_ms.tasks.scenes.base import SCENES, TabletopScene, register_scene  # noqa: F401
 from realm_ms.tasks.scenes import studio  # noqa: F401  (registers its scenes)
+from realm_ms.tasks.scenes import household  # noqa: F401  (kitchen, dining_room, office, living_room, pomaria)
 
 
 def get_scene(name: str) -> TabletopScene:

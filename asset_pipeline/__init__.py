@@ -1,0 +1,1 @@
+"""realm-ms asset pipeline: sources -> repaired, scaled, decomposed, annotated catalog objects."""

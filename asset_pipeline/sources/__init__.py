@@ -1,0 +1,8 @@
+"""Build sources. Importing this package registers all of them in ``SOURCES``."""
+
+from asset_pipeline.sources import folder, packages, procedural_src  # noqa: F401  (registration)
+from asset_pipeline.sources.base import SOURCES, SourceDef, SourceItem, package_dir
+
+DEFAULT_SOURCES = ("procedural", "ycb", "libero", "robosuite", "rgb_objects", "robocasa", "pybullet")
+
+__all__ = ["SOURCES", "SourceDef", "SourceItem", "DEFAULT_SOURCES", "package_dir"]

@@ -1,0 +1,109 @@
+"""The scripted expert: per-env skill generators -> batched IK -> smooth ``droid_joint_pos`` actions."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+
+from realm_ms.expert.ik import ArmIK, top_down_rotation
+from realm_ms.expert.primitives import Ctx, Target, hold
+
+MAX_JOINT_STEP = 0.15  # rad per control step (DROID-like smooth targets at 15 Hz)
+
+
+class Expert:
+    """Privileged scripted policy for REALM envs (reads object poses from the env).
+
+    Usage::
+
+        expert = make_expert(env)          # after env.reset(...)
+        action = expert.act()              # (num_envs, 8) torch tensor, droid_joint_pos
+
+    ``reset()`` must be called after every ``env.reset`` (``run_episode`` does it).
+    """
+
+    def __init__(self, env, skill=None, max_joint_step: float = MAX_JOINT_STEP):
+        from realm_ms.expert.skills import SKILLS
+
+        self.env = env.unwrapped if hasattr(env, "unwrapped") else env
+        if self.env.agent.control_mode != "droid_joint_pos":
+            raise ValueError(f"the expert drives droid_joint_pos, env uses {self.env.agent.control_mode!r}")
+        self.skill_name = skill or self.env.task_spec.skill
+        self.skill = SKILLS[self.skill_name]
+        self.max_joint_step = max_joint_step
+        self.ik = ArmIK.from_agent(self.env.agent)
+        self.reset()
+
+    def reset(self) -> None:
+        env = self.env
+        n = env.num_envs
+        self.base_p = env.agent.robot.pose.p.detach().cpu().clone()
+        self.q_cmd = env.agent.arm_qpos.detach().cpu().double().clone()
+        t = self.ik.tcp_fk(self.q_cmd)
+        self.ctxs = []
+        self.gens = []
+        for i in range(n):
+            c = Ctx(self, i)
+            r = t[i, :3, :3]
+            yaw = math.atan2(float(r[1, 1]), float(r[0, 1]))  # TCP y axis = closing direction
+            c.cmd = Target(t[i, :3, 3].numpy().copy(), yaw, 0.0)
+            self.ctxs.append(c)
+            self.gens.append(self.skill(c))
+        self.done = [False] * n
+
+    def _next(self, i: int) -> Target:
+        if not self.done[i]:
+            try:
+                return next(self.gens[i])
+            except StopIteration:
+                self.done[i] = True
+                self.gens[i] = hold(self.ctxs[i], 10**9)
+        return next(self.gens[i])
+
+    def act(self, obs=None) -> torch.Tensor:
+        targets = [self._next(i) for i in range(self.env.num_envs)]
+        p = torch.as_tensor(np.stack([t.p for t in targets]), dtype=torch.float64)
+        yaw = torch.as_tensor([t.yaw for t in targets], dtype=torch.float64)
+        q_ik, _ = self.ik.solve(self.q_cmd, p, top_down_rotation(yaw))
+        dq = (q_ik - self.q_cmd).clamp(-self.max_joint_step, self.max_joint_step)
+        self.q_cmd = self.q_cmd + dq
+        g = torch.as_tensor([[t.grip] for t in targets], dtype=torch.float64)
+        return torch.cat([self.q_cmd, g], 1).float().to(self.env.device)
+
+    __call__ = act
+
+
+def make_expert(env, skill: str | None = None, **kw) -> Expert:
+    return Expert(env, skill=skill, **kw)
+
+
+def run_episode(env, seed: int, max_steps: int | None = None, expert: Expert | None = None, on_step=None) -> dict:
+    """Reset ``env`` (num_envs = 1) with ``seed`` and run the expert until the episode ends.
+
+    Returns ``dict(progression, success, stalled_stage, steps, log)``."""
+    obs, _ = env.reset(seed=seed)
+    u = env.unwrapped
+    if expert is None:
+        expert = make_expert(u)
+    else:
+        expert.reset()
+    horizon = max_steps or u.task_spec.horizon
+    best, steps, info = 0.0, 0, {}
+    for steps in range(1, horizon + 1):
+        obs, _, term, trunc, info = env.step(expert.act(obs))
+        if on_step is not None:
+            on_step(env, obs, info)
+        best = max(best, float(info["progression"][0]))
+        if bool(term[0]) or bool(trunc[0]):
+            break
+        if expert.done[0]:  # the script has ended (and held): nothing more will happen
+            break
+    return dict(
+        progression=best,
+        success=bool(info.get("success", torch.zeros(1))[0]),
+        stalled_stage=u.stalled_stage()[0],
+        steps=steps,
+        log=list(expert.ctxs[0].log),
+    )

@@ -1,0 +1,26 @@
+"""Rotor (reflected) inertia in kg·m², added to the joints of the articulation (build time)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from realm_ms.sysid.effects.base import Effect
+from realm_ms.sysid.parameter import ParamSpec
+
+
+class Armature(Effect):
+    name = "armature"
+    summary = "armature (rotor inertia)"
+    signature = "no static effect; slower rise and overshoot after target steps, residual ∝ q̈, zero in holds"
+    order = 10
+    build_time = True
+
+    @classmethod
+    def param_specs(cls, config):
+        return [ParamSpec("ia", "kg·m²", 0.2, 0.0, 2.0, 0.0, doc="armature added to the joint")]
+
+    def build_target(self, target, row):
+        target.add_armature(self.theta[row, self._slices["ia"]].cpu().numpy().astype(np.float64))
+
+    def evidence(self, values, features):
+        return features.sentence_for(self, values)

@@ -1,0 +1,24 @@
+"""Gravity-compensation error: the robot's gravity model is off by a factor (1 + scale)."""
+
+from __future__ import annotations
+
+from realm_ms.sysid.effects.base import Effect, model_gravity
+from realm_ms.sysid.parameter import ParamSpec
+
+
+class GravityCompError(Effect):
+    name = "gravity_comp_error"
+    summary = "gravity-compensation error"
+    signature = "static offset proportional to each joint's gravity torque g_i(q), present at rest"
+    order = 30
+
+    @classmethod
+    def param_specs(cls, config):
+        return [ParamSpec("scale", "1", 0.1, -0.5, 0.5, 0.0, per_joint=False,
+                          doc="relative error of the compensated gravity torque")]
+
+    def actuator(self, tau, state):
+        return tau + self.p("scale", tau) * model_gravity(state)
+
+    def evidence(self, values, features):
+        return features.sentence_for(self, values)

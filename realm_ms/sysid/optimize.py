@@ -1,0 +1,238 @@
+"""Optimisers over effect parameters, in normalised coordinates u in [0, 1] (lin/log per parameter).
+
+* ``linearized_step``: batched secant (finite-difference) sensitivities of the simulated trajectory,
+  one Levenberg-Marquardt solve per group of parameters, a 2-point line search -- used by the
+  diagnosis to screen every candidate effect in a few batched rollouts and to start the fit.
+* ``cma_fit``: CMA-ES (the ``cmaes`` package) with the population evaluated as one batch,
+  progress bar, per-generation history and an optional resumable checkpoint.
+"""
+
+from __future__ import annotations
+
+import pickle
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from realm_ms.sysid.effects import Effect, make_effect
+from realm_ms.sysid.parameter import Param, ParamSet
+from realm_ms.sysid.replay import SegmentSet, score
+
+
+@dataclass
+class Group:
+    """A set of effects fitted together (one candidate explanation), with its free parameters."""
+
+    effects: list[Effect]
+    params: ParamSet
+    u: np.ndarray  # current point in unit coordinates
+
+    @classmethod
+    def of(cls, effects: list[Effect], params: list[Param] | None = None) -> "Group":
+        ps = ParamSet.of(params if params is not None else [p for fx in effects for p in fx.free_params])
+        x = np.array([fx.values()[p.local_key] for p in ps for fx in effects if fx.name == p.effect])
+        return cls(effects, ps, ps.to_unit(x))
+
+    def theta_rows(self, us: np.ndarray) -> dict[str, np.ndarray]:
+        """Effect name -> theta (R, n) for R points ``us`` (R, P) in unit coordinates."""
+        xs = self.params.from_unit(us)
+        out = {}
+        for fx in self.effects:
+            base = fx.theta[0].cpu().numpy().astype(np.float64)
+            rows = np.repeat(base[None], len(us), 0)
+            for k, p in enumerate(self.params):
+                if p.effect == fx.name:
+                    rows[:, fx.params.index(p)] = xs[:, k]
+            out[fx.name] = rows
+        return out
+
+    def apply(self, u: np.ndarray) -> None:
+        """Set the effects' values to point ``u``."""
+        self.u = np.clip(np.asarray(u, dtype=float), 0, 1)
+        for name, rows in self.theta_rows(self.u[None]).items():
+            fx = next(f for f in self.effects if f.name == name)
+            fx.set_theta(rows)
+
+    def values(self) -> dict[str, float]:
+        return self.params.as_dict(self.params.from_unit(self.u))
+
+
+def batch_effects(base: list[Effect], rows: list[dict[str, np.ndarray]], all_names: list[str], configs: dict) -> list[Effect]:
+    """Stack per-candidate theta rows into batched effect instances (one per effect name).
+    ``rows[c][name]`` is the (1, n) theta of effect ``name`` in candidate c; missing = off."""
+    out = []
+    for fx in base:
+        out.append(fx)  # base model effects: shared across candidates (theta with 1 row)
+    for name in all_names:
+        proto = make_effect(name, None, configs.get(name, {}))
+        off = proto.theta[0].cpu().numpy().astype(np.float64)
+        th = np.stack([r[name][0] if name in r else off for r in rows])
+        proto.set_theta(th)
+        out.append(proto)
+    return out
+
+
+def _config_dict(fx: Effect) -> dict:
+    from dataclasses import asdict
+
+    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
+
+
+def evaluate_groups(evaluator, segsets: list[SegmentSet], base: list[Effect], groups: list[Group],
+                    points: list[np.ndarray]) -> list[list]:
+    """Evaluate, for each group g, the points ``points[g]`` (R_g, P_g) on every segset; all in one
+    batch per segset. Returns ``out[s][g]`` = Scores with R_g candidates (plus the raw sampled q)."""
+    rows: list[dict[str, np.ndarray]] = []
+    owner: list[tuple[int, int]] = []
+    names: list[str] = []
+    configs: dict = {}
+    base_names = {fx.name for fx in base}
+    for gi, (g, pts) in enumerate(zip(groups, points)):
+        th = g.theta_rows(np.atleast_2d(pts))
+        for fx in g.effects:
+            if fx.name not in names and fx.name not in base_names:
+                names.append(fx.name)
+                configs[fx.name] = _config_dict(fx)
+        for r in range(len(np.atleast_2d(pts))):
+            rows.append({k: v[r:r + 1] for k, v in th.items()})
+            owner.append((gi, r))
+    n_cand = len(rows)
+    results = []
+    for ss in segsets:
+        effects = batch_effects(base, rows, names, configs)
+        sim = evaluator.simulate(ss, effects, n_cand)
+        sc = score(ss, sim, n_cand)
+        sim = sim.reshape(n_cand, ss.n, *sim.shape[1:])
+        per_group = []
+        for gi in range(len(groups)):
+            idx = [c for c, (g, _) in enumerate(owner) if g == gi]
+            per_group.append((sc.mse[idx], sc.per_joint_mse[idx], sim[idx]))
+        results.append(per_group)
+    return results
+
+
+def probe_steps(ps: ParamSet, u: np.ndarray, first: bool) -> np.ndarray:
+    """Secant step per parameter: towards the nominal strength (from off) on the first iteration,
+    30 % of that afterwards; never zero, always inside [0, 1]."""
+    u_nom, u_off = ps.to_unit(ps.nominal()), ps.to_unit(ps.off())
+    h = (u_nom - u_off) * (1.0 if first else 0.3)
+    h = np.where(np.abs(h) < 0.02, 0.05, h)
+    h = np.where((u + h > 1) | (u + h < 0), -h, h)
+    return h
+
+
+def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[Group], first: bool,
+                    damping: float = 1e-3) -> list[dict]:
+    """One Gauss-Newton/LM iteration for every group independently (other groups off), batched:
+    sum(P_g + 1) candidates for the sensitivities, then 2 per group for the line search. Updates
+    each group's point in place; returns per group {'mse_before', 'mse_after'} on ``ss``."""
+    pts, hs = [], []
+    for g in groups:
+        h = probe_steps(g.params, g.u, first)
+        hs.append(h)
+        pts.append(np.vstack([g.u[None], g.u[None] + np.diag(h)]))
+    res = evaluate_groups(evaluator, [ss], base, groups, pts)[0]
+    mask = ss.mask
+    cand = []
+    for g, h, (mse, _, sim) in zip(groups, hs, res):
+        y0 = sim[0][mask]  # (M, 7)
+        r = (ss.meas[mask] - y0).ravel()
+        J = np.stack([((sim[k + 1][mask] - y0).ravel()) / h[k] for k in range(len(h))], axis=1)
+        ok = np.isfinite(J).all(axis=0) & np.isfinite(r).all()
+        delta = np.zeros(len(h))
+        if ok.any() and np.isfinite(r).all():
+            Jo = J[:, ok]
+            jtj = Jo.T @ Jo
+            d = np.diag(jtj).copy()
+            reg = damping * np.diag(d) + 1e-12 * max(d.max(), 1e-30) * np.eye(len(d))
+            try:
+                delta[ok] = np.linalg.solve(jtj + reg, Jo.T @ r)
+            except np.linalg.LinAlgError:
+                delta[ok] = np.linalg.lstsq(jtj + reg, Jo.T @ r, rcond=None)[0]
+        full = np.clip(g.u + delta, 0, 1)
+        half = np.clip(g.u + 0.5 * delta, 0, 1)
+        cand.append(np.vstack([full, half]))
+        g._mse0 = float(mse[0])
+    res2 = evaluate_groups(evaluator, [ss], base, groups, cand)[0]
+    out = []
+    for g, c, (mse, _, _) in zip(groups, cand, res2):
+        best = int(np.argmin(mse))
+        if mse[best] < g._mse0:
+            g.apply(c[best])
+        out.append({"mse_before": g._mse0, "mse_after": float(min(mse[best], g._mse0))})
+    return out
+
+
+# ---------------------------------------------------------------------------- CMA-ES
+@dataclass
+class CmaResult:
+    u: np.ndarray
+    loss: float
+    history: list[dict] = field(default_factory=list)
+    generations: int = 0
+
+
+def cma_fit(loss_fn: Callable[[np.ndarray], np.ndarray], u0: np.ndarray, sigma0: float = 0.05, seed: int = 0,
+            max_generations: int = 40, popsize: int | None = None, patience: int = 8, tol: float = 1e-3,
+            checkpoint: str | Path | None = None, progress: bool = True, initial_loss: float | None = None) -> CmaResult:
+    """Minimise ``loss_fn`` (batched: (C, P) unit points -> (C,) losses) with CMA-ES in [0, 1]^P.
+
+    Stops after ``max_generations``, when the best loss improved by less than ``tol`` (relative) over
+    ``patience`` generations, or when CMA-ES says so. With ``checkpoint``, the optimiser state is
+    written after every generation and a rerun resumes from it."""
+    from cmaes import CMA
+
+    dim = len(u0)
+    ckpt = Path(checkpoint) if checkpoint else None
+    state = None
+    if ckpt and ckpt.exists():
+        try:
+            state = pickle.loads(ckpt.read_bytes())
+            if len(state["best_u"]) != dim:
+                state = None
+        except Exception:  # noqa: BLE001 - a corrupt checkpoint is ignored, not fatal
+            state = None
+    if state is None:
+        bounds = np.array([[0.0, 1.0]] * dim)
+        # cmaes needs dim >= 2; a 1-D problem gets a dummy coordinate that does nothing
+        opt = CMA(mean=np.r_[np.clip(u0, 0, 1), 0.5] if dim == 1 else np.clip(u0, 0, 1), sigma=sigma0,
+                  bounds=np.vstack([bounds, [[0, 1]]]) if dim == 1 else bounds, seed=seed,
+                  population_size=popsize)
+        state = {"opt": opt, "history": [], "best_u": np.clip(u0, 0, 1), "best_loss": initial_loss if initial_loss is not None else np.inf}
+    opt, history = state["opt"], state["history"]
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=max_generations, initial=len(history), desc="CMA-ES", unit="gen", leave=False)
+    try:
+        while len(history) < max_generations:
+            xs = np.array([opt.ask() for _ in range(opt.population_size)])
+            us = xs[:, :dim]
+            losses = np.asarray(loss_fn(us), dtype=float)
+            losses = np.where(np.isfinite(losses), losses, 1e6)
+            opt.tell([(x, float(v)) for x, v in zip(xs, losses)])
+            i = int(np.argmin(losses))
+            if losses[i] < state["best_loss"]:
+                state["best_loss"], state["best_u"] = float(losses[i]), us[i].copy()
+            history.append({"generation": len(history) + 1, "best_loss": float(np.sqrt(state["best_loss"])),
+                            "median_loss": float(np.sqrt(np.median(losses)))})
+            if bar:
+                bar.update(1)
+                bar.set_postfix(best_rmse=f"{history[-1]['best_loss']:.2e} rad")
+            if ckpt:
+                tmp = ckpt.with_suffix(".tmp")
+                tmp.write_bytes(pickle.dumps(state))
+                tmp.replace(ckpt)
+            if len(history) > patience:
+                old = history[-1 - patience]["best_loss"]
+                if old - history[-1]["best_loss"] <= tol * old:
+                    break
+            if opt.should_stop():
+                break
+    finally:
+        if bar:
+            bar.close()
+    return CmaResult(state["best_u"], float(state["best_loss"]), history, len(history))

@@ -1,0 +1,119 @@
+"""Measured trajectories: the in-memory form, validation, and the seeded train/held-out split.
+
+A :class:`Trajectory` is one continuous recording: timestamps ``t`` (T,) [s], measured joint
+positions ``q`` (T, 7) [rad], commanded joint targets ``q_cmd`` (T, 7) [rad] held from ``t[i]``
+until ``t[i+1]``, optional measured velocities ``qd`` (T, 7) [rad/s] and torques ``tau`` (T, 7)
+[N·m]. File formats live in ``data_io.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+MIN_SAMPLES = 20
+MIN_DURATION_S = 1.0
+
+
+class DataError(ValueError):
+    """The data cannot be used; the message says what is wrong and how to fix it."""
+
+
+@dataclass
+class Trajectory:
+    name: str
+    t: np.ndarray
+    q: np.ndarray
+    q_cmd: np.ndarray
+    qd: np.ndarray | None = None
+    tau: np.ndarray | None = None
+    gripper: np.ndarray | None = None
+    gripper_cmd: np.ndarray | None = None
+    control_hz: float | None = None
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    @property
+    def rate_hz(self) -> float:
+        return float((len(self.t) - 1) / max(self.duration, 1e-9))
+
+    def velocity(self) -> np.ndarray:
+        """Measured velocity, or central finite differences of ``q`` when the log has none."""
+        if self.qd is not None:
+            return self.qd
+        return np.gradient(self.q, self.t, axis=0)
+
+
+def _check_array(name: str, where: str, a, shape_tail: tuple[int, ...], n: int | None) -> np.ndarray:
+    try:
+        a = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise DataError(f"{where}: `{name}` is not numeric") from None
+    if a.ndim != 1 + len(shape_tail) or a.shape[1:] != shape_tail:
+        want = "(T,)" if not shape_tail else f"(T, {', '.join(map(str, shape_tail))})"
+        raise DataError(f"{where}: `{name}` has shape {a.shape}, expected {want}")
+    if n is not None and a.shape[0] != n:
+        raise DataError(f"{where}: `{name}` has {a.shape[0]} samples but `t` has {n}; all arrays need one row per timestamp")
+    bad = ~np.isfinite(a)
+    if bad.any():
+        i = int(np.argwhere(bad)[0][0])
+        raise DataError(f"{where}: `{name}` contains NaN/inf (first at sample {i}); drop or interpolate those samples")
+    return a
+
+
+def validate(traj: Trajectory, q_limits: np.ndarray, where: str | None = None) -> Trajectory:
+    """Check one trajectory; raise :class:`DataError` with a clear message, return it cleaned."""
+    where = where or traj.name
+    t = _check_array("t", where, traj.t, (), None)
+    n = t.shape[0]
+    if n < MIN_SAMPLES:
+        raise DataError(f"{where}: only {n} samples; need at least {MIN_SAMPLES} (and {MIN_DURATION_S:g} s) per trajectory")
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise DataError(f"{where}: time is not strictly increasing at sample {i + 1} (t = {t[i]:.6g} -> {t[i + 1]:.6g} s); sort or de-duplicate the samples")
+    if t[-1] - t[0] < MIN_DURATION_S:
+        raise DataError(f"{where}: lasts {t[-1] - t[0]:.3g} s; need at least {MIN_DURATION_S:g} s")
+    if np.median(dt) > 1.0:
+        raise DataError(f"{where}: median time step {np.median(dt):.3g} s; `t` must be in seconds (milliseconds or ns?)")
+    q = _check_array("q", where, traj.q, (7,), n)
+    q_cmd = _check_array("q_cmd", where, traj.q_cmd, (7,), n)
+    qd = None if traj.qd is None else _check_array("qd", where, traj.qd, (7,), n)
+    tau = None if traj.tau is None else _check_array("tau", where, traj.tau, (7,), n)
+    for name, a in (("q", q), ("q_cmd", q_cmd)):
+        if np.abs(a).max() > 2 * np.pi:
+            raise DataError(f"{where}: `{name}` reaches {np.abs(a).max():.1f}; joint angles must be in radians (these look like degrees: multiply by pi/180)")
+    lo, hi = q_limits[:, 0], q_limits[:, 1]
+    tol = 1e-3
+    out = (q_cmd < lo - tol) | (q_cmd > hi + tol)
+    if out.any():
+        i, j = (int(v) for v in np.argwhere(out)[0])
+        raise DataError(
+            f"{where}: commanded target of joint {j + 1} = {q_cmd[i, j]:.4f} rad at sample {i} is outside the joint limits "
+            f"[{lo[j]:.4f}, {hi[j]:.4f}] rad; check the joint order (panda_joint1..7) and units"
+        )
+    out = (q < lo - 0.05) | (q > hi + 0.05)
+    if out.any():
+        i, j = (int(v) for v in np.argwhere(out)[0])
+        raise DataError(f"{where}: measured joint {j + 1} = {q[i, j]:.4f} rad at sample {i} is outside the joint limits [{lo[j]:.4f}, {hi[j]:.4f}] rad")
+    return Trajectory(traj.name, t - t[0], q, q_cmd, qd, tau, traj.gripper, traj.gripper_cmd, traj.control_hz, dict(traj.meta))
+
+
+def split(trajs: list[Trajectory], heldout_fraction: float = 0.3, seed: int = 0) -> tuple[list[Trajectory], list[Trajectory]]:
+    """Seeded split *by trajectory*: a permutation with ``numpy.random.default_rng(seed)`` of the
+    trajectories sorted by name; the first ``max(1, round(f * N))`` are held out. Needs N >= 2."""
+    if len(trajs) < 2:
+        raise DataError(
+            f"need at least 2 trajectories to hold some out (got {len(trajs)}); record more or pass --heldout DIR"
+        )
+    order = sorted(range(len(trajs)), key=lambda i: trajs[i].name)
+    perm = np.random.default_rng(seed).permutation(len(order))
+    n_held = min(len(trajs) - 1, max(1, int(round(heldout_fraction * len(trajs)))))
+    held_idx = {order[i] for i in perm[:n_held]}
+    train = [trajs[i] for i in order if i not in held_idx]
+    held = [trajs[i] for i in order if i in held_idx]
+    return train, held

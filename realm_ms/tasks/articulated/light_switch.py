@@ -1,0 +1,102 @@
+"""A rocker light switch built in code, toggled physically by pressing the rocker past its centre.
+
+Base (fixed root, a small box on the table) + rocker link on a revolute joint about the base's
+local y axis, limited to +-``tilt``. The rocker's centre of mass sits above the pivot, so gravity
+holds it against whichever limit it leans towards: an over-centre detent, bistable like a real
+rocker switch. Pressing the raised end down past the centre flips it, and it snaps to the other
+limit. ``toggled()`` = the rocker angle is past ``on_threshold`` on the "on" side (q > 0); there is
+no timer and no scripted state. At reset the rocker is set to the "off" limit (or "on" with
+``?on=1``).
+
+Frame: origin at the bottom centre; the "off" position raises the rocker's +x end (pointing away
+from the robot at yaw 0), so pushing that end down turns the switch on. The +x half of the rocker
+carries an orange "ON" stripe.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import sapien
+import torch
+
+from realm_ms.tasks.articulated.common import ArticulatedTaskObject, box, mat
+from realm_ms.tasks.progression import quat_to_matrix
+
+
+@dataclass(frozen=True)
+class SwitchGeometry:
+    base_half: tuple = (0.06, 0.045, 0.02)  # x, y, z half sizes of the housing
+    rocker_half: tuple = (0.045, 0.032, 0.007)
+    pivot_height: float = 0.008  # rocker plate centre above the pivot (puts the CoM above it)
+    tilt: float = 0.21  # rad, rest angle at either limit (~12 deg)
+    on_threshold: float = 0.0  # rad, toggled when q > threshold
+    joint_friction: float = 0.0
+    joint_damping: float = 0.002
+    rocker_density: float = 3000.0
+    base_rgba: tuple = (0.92, 0.92, 0.90, 1.0)
+    rocker_rgba: tuple = (0.97, 0.97, 0.97, 1.0)
+    on_rgba: tuple = (0.95, 0.45, 0.10, 1.0)
+
+
+class LightSwitch(ArticulatedTaskObject):
+    def __init__(self, env, spec, on: str | int = 0, geometry: SwitchGeometry | None = None):
+        super().__init__(env)
+        g = geometry or SwitchGeometry()
+        self.geom = g
+        self.init_on = bool(int(on))
+        self.footprint_radius = float(np.hypot(g.base_half[0], g.base_half[1]))
+        self.art = self._build(env.scene, spec.name)
+        self.rocker = self.art.links_map["rocker"]
+        self._pivot_z = 2 * g.base_half[2]
+        self._anchor_local = torch.tensor([0.0, 0.0, g.pivot_height], device=self.device)
+
+    def _build(self, scene, name: str):
+        g = self.geom
+        bx, by, bz = g.base_half
+        rx, ry, rz = g.rocker_half
+        ab = scene.create_articulation_builder()
+        root = ab.create_link_builder()
+        root.set_name("housing")
+        box(root, (0, 0, bz), (bx, by, bz), mat(g.base_rgba, 0.5), density=800)
+        lb = ab.create_link_builder(root)
+        lb.set_name("rocker")
+        lb.set_joint_name("rocker_joint")
+        # revolute axis = joint-frame x; rotate the joint frame so that it is the base's y axis
+        q_axis = [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)]  # +90 deg about z: x -> y
+        lb.set_joint_properties(
+            "revolute", limits=[[-g.tilt, g.tilt]],
+            pose_in_parent=sapien.Pose([0, 0, 2 * bz], q_axis), pose_in_child=sapien.Pose([0, 0, 0], q_axis),
+            friction=g.joint_friction, damping=g.joint_damping,
+        )
+        box(lb, (0, 0, g.pivot_height), (rx, ry, rz), mat(g.rocker_rgba, 0.35), density=g.rocker_density)
+        box(lb, (rx * 0.55, 0, g.pivot_height + rz + 0.0005), (rx * 0.3, ry * 0.6, 0.0005), mat(g.on_rgba, 0.4), collision=False)
+        ab.initial_pose = sapien.Pose([0, 0, -2.0])
+        return ab.build(name=name, fix_root_link=True)
+
+    # joint sign: rotating about +y by q tilts the +x end DOWN for q > 0
+    def angle(self) -> torch.Tensor:
+        return self.art.get_qpos()[:, 0]
+
+    def toggled(self) -> torch.Tensor:
+        return self.angle() > self.geom.on_threshold
+
+    def anchor_pos(self) -> torch.Tensor:
+        """Centre of the rocker plate."""
+        pose = self.rocker.pose
+        return pose.p + (quat_to_matrix(pose.q) @ self._anchor_local)
+
+    def press_point_local(self) -> tuple[float, float, float]:
+        """Where to press (in the housing frame) to turn it on: the raised +x end of the rocker top."""
+        g = self.geom
+        x = g.rocker_half[0] * 0.7
+        return (x, 0.0, 2 * g.base_half[2] + g.pivot_height + g.rocker_half[2] + x * np.sin(g.tilt))
+
+    def touch_entities(self) -> list:
+        return [self.rocker]
+
+    def reset_joints(self, b: int) -> None:
+        q = torch.full((b, 1), self.geom.tilt if self.init_on else -self.geom.tilt, device=self.device)
+        self.art.set_qpos(q)
+        self.art.set_qvel(torch.zeros_like(q))

@@ -1,0 +1,21 @@
+"""REALM task 7, REALM-PushSwitch-v1: push the light switch (skill "push": REACH -> TOUCH -> TOGGLED_ON).
+
+The switch is our rocker switch (``realm_ms.tasks.articulated.light_switch``), physically toggled
+by pressing its raised end past the centre. REALM's is wall-mounted; ours sits on the table (a
+desk/power-strip rocker) so every task shares the same top-down workspace.
+"""
+
+from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+
+SPEC = TaskSpec(
+    env_id="REALM-PushSwitch-v1",
+    skill="push",
+    instruction="push the light switch",
+    description="Press a rocker light switch on the table so that it turns on",
+    scene="kitchen",
+    objects=(
+        SceneObject("light_switch", "articulated/light_switch", role="main", region=(0.42, 0.68, -0.20, 0.20), yaw=(-0.5, 0.5)),
+    ),
+)
+
+PushSwitchEnv = register_task(SPEC)
