@@ -52,9 +52,10 @@ class Outcome:
     record: dict | None = None
     error: str | None = None
     decomposition: str | None = None
+    cpu_seconds: float = 0.0  # this process + CoACD children: independent of machine contention
 
 
-class ObjectTimeout(Exception):
+class ObjectTimeout(BaseException):  # BaseException: library `except Exception` must not swallow it
     pass
 
 
@@ -105,10 +106,9 @@ def build_object(item: SourceItem, out: Path, cfg: BuildConfig, content_hash: st
         cache = Path(out) / "cache" / "coacd"
         dec = decompose(mesh, cfg.coacd, cache, use_coacd=cfg.use_coacd)
     col_volume = float(sum(h.volume for h in dec.hulls))
-    if lo.mass is not None:
-        mass = lo.mass
-    else:
-        mass = mass_for(solid_volume(mesh), info)
+    # Category densities are effective densities over the *filled* (collision) volume, the same
+    # convention as the procedural generators, so hollow shells (bowls, lids) get plausible masses.
+    mass = lo.mass if lo.mass is not None else mass_for(col_volume if col_volume > 0 else solid_volume(mesh), info)
     sem = lo.semantics or info.semantics
     colors = list(sem.colors) if lo.semantics else ([item.color] if item.color else dominant_colors(lo.scene))
     folder = object_folder(out, item.id)
@@ -146,8 +146,21 @@ def cached_record(item: SourceItem, out: Path, content_hash: str) -> dict | None
     return d if d.get("content_hash") == content_hash else None
 
 
+def _cpu_now() -> float:
+    import resource
+
+    return time.process_time() + resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime + resource.getrusage(resource.RUSAGE_CHILDREN).ru_stime
+
+
 def process_item(item: SourceItem, out: str | Path, cfg: BuildConfig) -> Outcome:
     """Build one object unless an identical one is cached; never raises (failures are outcomes)."""
+    c0 = _cpu_now()
+    o = _process_item(item, out, cfg)
+    o.cpu_seconds = _cpu_now() - c0
+    return o
+
+
+def _process_item(item: SourceItem, out: str | Path, cfg: BuildConfig) -> Outcome:
     t0 = time.perf_counter()
     out = Path(out)
     h = item_hash(item, cfg)
@@ -163,5 +176,5 @@ def process_item(item: SourceItem, out: str | Path, cfg: BuildConfig) -> Outcome
         with time_limit(cfg.object_timeout_s):
             rec, dec = build_object(item, out, cfg, h)
         return Outcome(item.id, "built", time.perf_counter() - t0, json.loads(rec.to_json()), decomposition=dec.method)
-    except Exception as e:  # isolation: one bad mesh must not stop the build
+    except (Exception, ObjectTimeout) as e:  # isolation: one bad mesh must not stop the build
         return Outcome(item.id, "failed", time.perf_counter() - t0, error=f"{type(e).__name__}: {e}"[:500])

@@ -34,6 +34,15 @@ def pairwise_forces(scene, pairs: list[tuple]) -> list[torch.Tensor]:
 
 def any_contact(scene, group_a: list, group_b: list, min_force: float = 1e-3) -> torch.Tensor:
     """(num_envs,) bool: any member of ``group_a`` touches any member of ``group_b``."""
-    pairs = [(a, b) for a in group_a for b in group_b]
-    forces = pairwise_forces(scene, pairs)
-    return torch.stack([f.norm(dim=-1) > min_force for f in forces]).any(dim=0)
+    if scene.gpu_sim_enabled:
+        forces = pairwise_forces(scene, [(a, b) for a in group_a for b in group_b])
+        return torch.stack([f.norm(dim=-1) > min_force for f in forces]).any(dim=0)
+    ea = {a._bodies[0].entity for a in group_a}
+    eb = {b._bodies[0].entity for b in group_b}
+    threshold = min_force * scene.px.timestep  # impulse over one step
+    for c in scene.px.get_contacts():
+        e0, e1 = c.bodies[0].entity, c.bodies[1].entity
+        if ((e0 in ea and e1 in eb) or (e1 in ea and e0 in eb)) and c.points:
+            if np.linalg.norm(np.sum([p.impulse for p in c.points], axis=0)) > threshold:
+                return torch.ones(1, dtype=torch.bool)
+    return torch.zeros(1, dtype=torch.bool)

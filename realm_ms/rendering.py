@@ -11,6 +11,7 @@ from __future__ import annotations
 import copy
 import functools
 
+import numpy as np
 from mani_skill.render.shaders import PREBUILT_SHADER_CONFIGS, ShaderConfig
 
 
@@ -31,3 +32,8 @@ def shader_config(name: str) -> ShaderConfig:
     if cfg.shader_pack_config.get("ray_tracing_denoiser") == "optix" and not optix_available():
         cfg.shader_pack_config["ray_tracing_denoiser"] = "none"
     return cfg
+
+
+def vertical_fov(hfov_deg: float, width: int, height: int) -> float:
+    """ManiSkill cameras take the vertical FOV (rad); DROID camera specs give the horizontal one."""
+    return float(2 * np.arctan(np.tan(np.deg2rad(hfov_deg) / 2) * height / width))

@@ -47,12 +47,9 @@ def traffic_cone(rng, color):
 def dumbbell(rng, color):
     r = rng.uniform(0.025, 0.04)
     L = rng.uniform(0.14, 0.2)
-    bar = g.moved(g.cylinder(0.012, L, sections=12), (-L / 2, 0, r), rot=_X)
-    bar.apply_translation((L / 2, 0, 0))
+    bar = g.moved(g.cylinder(0.012, L, z0=-L / 2, sections=12), (0, 0, r), rot=_X)
     w = rng.uniform(0.025, 0.04)
-    ends = [g.moved(g.cylinder(r, w, sections=16), (x, 0, r), rot=_X) for x in (-L / 2 + w / 2, L / 2 - w / 2)]
-    for e in ends:
-        e.apply_translation((0, 0, 0))
+    ends = [g.moved(g.cylinder(r, w, z0=-w / 2, sections=16), (x, 0, r), rot=_X) for x in (-L / 2 + w / 2, L / 2 - w / 2)]
     return Geometry([part(bar, "silver", rng, 0.3)] + [part(e, color, rng, 0.5) for e in ends], colors=(color, "silver"), lying=True)
 
 
@@ -95,8 +92,7 @@ def hammer(rng, color):
 def screwdriver(rng, color):
     hl, sl = rng.uniform(0.08, 0.11), rng.uniform(0.06, 0.12)
     handle = g.moved(g.rounded_box((hl, 0.028, 0.028), 0.008), (-hl / 2, 0, 0))
-    shaft = g.moved(g.cylinder(0.003, sl, sections=8), (0, 0, 0.014), rot=_X)
-    shaft.apply_translation((sl / 2, 0, 0))
+    shaft = g.moved(g.cylinder(0.003, sl, sections=8), (0, 0, 0.014), rot=_X)  # x in [0, sl]
     return Geometry([part(handle, color, rng, 0.4), part(shaft, "silver", rng, 0.2)], colors=(color, "silver"), lying=True)
 
 
@@ -214,8 +210,7 @@ def padlock(rng, color):
 def battery(rng, color):
     r = rng.choice([0.007, 0.0105, 0.0125])
     L = r * rng.uniform(4.5, 5.0)
-    body = g.moved(g.cylinder(r, L, sections=16), (-L / 2, 0, r), rot=_X)
-    body.apply_translation((L / 2, 0, 0))
+    body = g.moved(g.cylinder(r, L, z0=-L / 2, sections=16), (0, 0, r), rot=_X)
     tip = g.moved(g.cylinder(r * 0.35, 0.0015, sections=8), (L / 2, 0, r), rot=_X)
     return Geometry([part(body, color, rng, 0.3), part(tip, "silver", rng)], collision=[g.hull(body)], colors=(color, "silver"), lying=True)
 

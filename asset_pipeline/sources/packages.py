@@ -147,7 +147,8 @@ def robocasa_items(root: Path) -> Iterator[SourceItem]:
     for f in sorted(root.glob("*/*/visuals/*.obj")):
         name = f.parent.parent.name
         cat = infer_category(f.stem) or "electric_switch"
-        yield SourceItem(id=f"robocasa/{name}", source="robocasa", licence="MIT", category=cat, mesh=str(f), name=name)
+        col = "white" if "white" in name else None  # texture-less MTL: colour from the fixture's name
+        yield SourceItem(id=f"robocasa/{name}", source="robocasa", licence="MIT", category=cat, mesh=str(f), name=name, color=col)
 
 
 # --- pybullet_data (pybullet) -----------------------------------------------------------------------------
@@ -170,16 +171,20 @@ _PYB_OBJECTS = {  # URDF stem -> category: the household items worth having
 }
 
 
-def _urdf_mesh_files(urdf: Path) -> tuple[Path | None, Path | None, list[float]]:
+def _urdf_mesh_files(urdf: Path) -> tuple[Path | None, Path | None, list[float], str]:
+    """Visual mesh, collision mesh, scale and up axis (a +90 deg visual roll means a y-up file)."""
     root = ET.parse(urdf).getroot()
     vis = root.find(".//visual/geometry/mesh")
     col = root.find(".//collision/geometry/mesh")
     if vis is None:
-        return None, None, [1.0, 1.0, 1.0]
+        return None, None, [1.0, 1.0, 1.0], "z"
+    origin = root.find(".//visual/origin")
+    rpy = [float(v) for v in (origin.get("rpy", "0 0 0") if origin is not None else "0 0 0").split()]
+    up = "y" if abs(rpy[0] - 1.5708) < 0.01 else "z"
     scale = [float(v) for v in vis.get("scale", "1 1 1").split()]
     v = urdf.parent / vis.get("filename")
     c = urdf.parent / col.get("filename") if col is not None else None
-    return (v if v.exists() else None), (c if c is not None and c.exists() else None), scale
+    return (v if v.exists() else None), (c if c is not None and c.exists() else None), scale, up
 
 
 @register_source("pybullet", licence="zlib", package="pybullet", description="pybullet_data: household items + 1,000 pre-split random_urdfs",
@@ -189,16 +194,18 @@ def pybullet_items(root: Path, random_urdfs: bool = True) -> Iterator[SourceItem
         urdf = root / f"{stem}.urdf"
         if cat is None or not urdf.exists():
             continue
-        vis, _col, scale = _urdf_mesh_files(urdf)
+        vis, col, scale, up = _urdf_mesh_files(urdf)
         if vis is None:
             continue
         extra = [str(p) for p in vis.parent.glob("*.mtl")] + [str(p) for p in vis.parent.glob("*.png")] + [str(p) for p in vis.parent.glob("*.jpg")]
+        # Only V-HACD outputs are already convex parts; other collision meshes get decomposed.
+        prebuilt = str(col) if col is not None and "vhacd" in col.name.lower() else None
         yield SourceItem(id=f"pybullet/{stem.split('/')[-1]}", source="pybullet", licence="zlib", category=cat, mesh=str(vis),
-                         mesh_scale=scale, up="z", name=stem, extra_files=sorted(extra)[:8])
+                         mesh_scale=scale, up=up, collision_file=prebuilt, name=stem, extra_files=sorted(extra)[:8])
     if not random_urdfs:
         return
     for urdf in sorted((root / "random_urdfs").glob("*/*.urdf")):
-        vis, col, scale = _urdf_mesh_files(urdf)
+        vis, col, scale, _up = _urdf_mesh_files(urdf)
         if vis is None:
             continue
         # Procedurally generated blobs, already split into convex parts (``*_coll.obj``): no CoACD.

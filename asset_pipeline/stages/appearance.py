@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-MAX_THUMB_FACES = 6000
+MAX_THUMB_FACES = 20000  # painter cost is ~15 us per face; scans have 16k faces
 
 
 def face_colors(g: trimesh.Trimesh) -> np.ndarray:
@@ -21,7 +21,11 @@ def face_colors(g: trimesh.Trimesh) -> np.ndarray:
         if isinstance(vis, trimesh.visual.TextureVisuals):
             mat = vis.material
             img = getattr(mat, "image", None) or getattr(mat, "baseColorTexture", None)
-            factor = np.asarray(getattr(mat, "baseColorFactor", None) if getattr(mat, "baseColorFactor", None) is not None else getattr(mat, "main_color", [255, 255, 255, 255]), float)[:3] / 255.0
+            if isinstance(mat, trimesh.visual.material.PBRMaterial):  # glTF: texture x factor
+                f = mat.baseColorFactor if mat.baseColorFactor is not None else [255, 255, 255, 255]
+            else:  # OBJ/MTL: map_Kd replaces Kd in practice (exporters write a grey Kd)
+                f = [255, 255, 255] if img is not None else getattr(mat, "main_color", [153, 153, 153])
+            factor = np.asarray(f, float)[:3] / 255.0
             if img is not None and vis.uv is not None and len(vis.uv) == len(g.vertices):
                 im = np.asarray(img.convert("RGB"), float) / 255.0
                 uv = vis.uv[g.faces].mean(1) % 1.0

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import trimesh
 
-from asset_pipeline.export import coloured_parts_scene, pbr_material
+from asset_pipeline.export import coloured_parts_scene, pbr_material, read_convex_obj
 from asset_pipeline.procedural.colors import PALETTE
 from asset_pipeline.semantics import Semantics
 from asset_pipeline.sources.base import SourceItem
@@ -75,8 +75,10 @@ def load_item(item: SourceItem) -> Loaded:
         hulls = [_box(b) for b in item.collision_boxes]
     elif item.collision_file:
         try:
-            col = trimesh.load(item.collision_file, force="scene", process=False, split_object=True, group_material=False)
-            hulls = [trimesh.convex.convex_hull(g.vertices) for g in col.geometry.values() if len(g.vertices) >= 4]
+            # One convex part per OBJ object (trimesh merges objects that share a material).
+            parts = read_convex_obj(item.collision_file) if str(item.collision_file).lower().endswith(".obj") else \
+                list(trimesh.load(item.collision_file, force="scene", process=False).geometry.values())
+            hulls = [trimesh.convex.convex_hull(g.vertices) for g in parts if len(g.vertices) >= 4]
             for h in hulls:
                 h.apply_transform(up @ S)
         except Exception as e:

@@ -30,24 +30,30 @@ def repair_mesh(m: trimesh.Trimesh) -> None:
 
 
 def repair_scene(scene: trimesh.Scene) -> RepairReport:
+    """Clean the *visual* meshes in place (UV seams are kept: vertices merge only with equal UVs);
+    hole filling happens on the geometry copy from :func:`combined`, never on textured meshes."""
     before = sum(len(g.faces) for g in scene.geometry.values())
-    filled = False
     for name in list(scene.geometry):
         g = scene.geometry[name]
+        g.merge_vertices()
         repair_mesh(g)
         if not len(g.faces):
             scene.delete_geometry(name)
-            continue
-        if not g.is_watertight:
-            filled |= bool(trimesh.repair.fill_holes(g))
     after = sum(len(g.faces) for g in scene.geometry.values())
     if after == 0:
         raise MeshError("mesh has no valid faces after repair")
-    watertight = all(g.is_watertight for g in scene.geometry.values())
-    return RepairReport(before, after, watertight, filled)
+    geo = combined(scene)
+    return RepairReport(before, after, geo.is_watertight, bool(geo.metadata.get("holes_filled", False)))
 
 
 def combined(scene: trimesh.Scene) -> trimesh.Trimesh:
-    """All geometry as one plain mesh (no visuals) for geometric computations."""
-    ms = [trimesh.Trimesh(g.vertices, g.faces, process=False) for g in scene.geometry.values()]
-    return trimesh.util.concatenate(ms) if len(ms) > 1 else ms[0]
+    """All geometry as one plain mesh merged by position (no visuals), winding fixed and holes
+    filled: the input for volume, mass and convex decomposition."""
+    ms = [trimesh.Trimesh(g.vertices, g.faces, process=True) for g in scene.geometry.values()]
+    m = trimesh.util.concatenate(ms) if len(ms) > 1 else ms[0]
+    repair_mesh(m)
+    filled = False
+    if not m.is_watertight:
+        filled = bool(trimesh.repair.fill_holes(m))
+    m.metadata["holes_filled"] = filled
+    return m

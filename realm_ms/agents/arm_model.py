@@ -144,11 +144,10 @@ class ArmModel:
             for j in children.get(link_name, []):
                 c = j.find("child").get("link")
                 if c in chain_links and id(child_joint[c]) in moving_idx:
-                    continue  # next moving body starts here
-                if c in chain_links:  # fixed joint on the chain
-                    subtree(c, t @ _origin(j.find("origin")), out)
-                else:  # side branch: lumped at zero configuration
-                    subtree(c, t @ _origin(j.find("origin")), out)
+                    continue  # the next moving body starts here
+                # fixed joints on the chain and side branches (gripper, camera) are lumped rigidly,
+                # side branches at their zero configuration
+                subtree(c, t @ _origin(j.find("origin")), out)
 
         origins, axes, inertials = [], [], []
         pending = np.eye(4)  # fixed transforms accumulated since the previous moving joint

@@ -19,7 +19,7 @@ driver to its own articulations, so an identified model is the model the benchma
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np

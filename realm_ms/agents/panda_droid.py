@@ -20,7 +20,6 @@ from mani_skill.agents.base_agent import BaseAgent, Keyframe
 from mani_skill.agents.controllers import PDEEPoseControllerConfig, PDJointPosControllerConfig
 from mani_skill.agents.registration import register_agent
 from mani_skill.sensors.camera import CameraConfig
-from mani_skill.utils import common
 
 import sapien
 
@@ -33,7 +32,7 @@ from realm_ms.agents.droid_controller import (
     DroidJointImpedanceControllerConfig,
 )
 from realm_ms.contacts import any_contact
-from realm_ms.rendering import shader_config
+from realm_ms.rendering import shader_config, vertical_fov
 from realm_ms.agents.urdf import CAMERA_LINK, FLANGE_LINK, TCP_LINK, panda_droid_urdf_path
 
 DROID_RESET_ARM_QPOS = (0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0)
@@ -114,7 +113,7 @@ class PandaDroid(BaseAgent):
     @property
     def _sensor_configs(self):
         w, h, shader = self.wrist_camera
-        fovy = 2 * np.arctan(np.tan(np.deg2rad(WRIST_HFOV_DEG) / 2) * h / w)
+        fovy = vertical_fov(WRIST_HFOV_DEG, w, h)
         return [
             CameraConfig(
                 "wrist", pose=sapien.Pose(), width=w, height=h, fov=fovy, near=0.01, far=10.0,

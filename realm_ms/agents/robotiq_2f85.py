@@ -289,6 +289,8 @@ class RobotiqGripperController(PDJointPosMimicController):
         delta = torch.clamp(self._goal_qpos - self._target_qpos, -max_dq, max_dq)
         self._target_qpos = self._target_qpos + delta
         self.set_drive_targets(self._target_qpos)
+        if self.scene.gpu_sim_enabled:  # ManiSkill applies GPU targets once per action; we move them every substep
+            self.scene.px.gpu_apply_articulation_target_position()
 
     def get_state(self) -> dict:
         return {"target_qpos": self._target_qpos, "goal_qpos": self._goal_qpos}

@@ -11,7 +11,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -94,7 +93,9 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     group = Group.of(fitted)
     gn_hist = []
     for it in range(cfg.gn_iterations):
-        r = linearized_step(ev, tr_ss, base_fixed, [group], first=(it == 0 and not cfg.refit))[0]
+        # first iteration as the diagnosis screens (block probes from the off-values: robust for
+        # stick-slip effects), then full-Jacobian iterations
+        r = linearized_step(ev, tr_ss, base_fixed, [group], first=(it == 0 and not cfg.refit), block=(it == 0))[0]
         gn_hist.append({"iteration": it + 1, "train_rmse_rad": float(np.sqrt(r["mse_after"]))})
         log(f"linearised start {it + 1}: train RMSE {np.sqrt(r['mse_before']):.3e} -> {np.sqrt(r['mse_after']):.3e} rad")
 

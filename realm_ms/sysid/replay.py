@@ -24,6 +24,26 @@ import numpy as np
 from realm_ms.sysid.timeseries import Trajectory
 
 
+def held_commands(t: np.ndarray, q_cmd: np.ndarray, n_steps: int, dt: float) -> np.ndarray:
+    """Target per physics step k: the time average over [k dt, (k+1) dt) of the zero-order-hold
+    command (q_cmd[i] held from t[i] until t[i+1], ``t`` relative to the simulation start). When
+    the log's command switches fall between physics steps (100-500 Hz logs with a 120 Hz sim),
+    the switch step gets the blend -- command timing at sub-step resolution, so the replay does
+    not depend on how the physics grid falls on the log. At 15 Hz / 120 Hz the grid is aligned and
+    this is exactly the held value."""
+    t = np.asarray(t, dtype=float)
+    widths = np.diff(t)
+    cum = np.concatenate([np.zeros((1, q_cmd.shape[1])), np.cumsum(widths[:, None] * q_cmd[:-1], axis=0)])
+
+    def integral(tau: np.ndarray) -> np.ndarray:
+        j = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, len(t) - 1)
+        return cum[j] + (tau - t[j])[:, None] * q_cmd[j]
+
+    edges = np.arange(n_steps + 1) * dt
+    vals = integral(edges)
+    return (vals[1:] - vals[:-1]) / dt
+
+
 def _quietness(tr: Trajectory) -> np.ndarray:
     """Per sample: how far from quasi-static the arm is (|q̇| and |q̈| summed over joints, scaled),
     plus how much the target moves; low = a good place to start a segment from measurements."""
@@ -108,9 +128,7 @@ class SegmentSet:
             tr = trajs[s.traj]
             tt = tr.t[s.start:s.stop] - tr.t[s.start]
             q0[i], qd0[i] = tr.q[s.start], vel[s.traj][s.start]
-            k_time = np.arange(n_steps) * dt
-            j = np.clip(np.searchsorted(tt, k_time + 1e-9, side="right") - 1, 0, len(tt) - 1)
-            cmd[i] = tr.q_cmd[s.start:s.stop][j]
+            cmd[i] = held_commands(tt, tr.q_cmd[s.start:s.stop], n_steps, dt)
             m = s.stop - s.start
             pos[i, :m] = np.minimum(tt / dt, n_steps)
             pos[i, m:] = pos[i, m - 1]

@@ -82,7 +82,6 @@ def compute(segset, sim_q: np.ndarray, gravity: np.ndarray | None = None) -> Fea
     mask = segset.mask
     res = (segset.meas - sim_q)[mask]  # (M, 7)
     vel_all, acc_all, err_all, simv_all, measv_all = [], [], [], [], []
-    lags = []
     for i, s in enumerate(segset.segments):
         tr = segset.trajs[s.traj]
         v = tr.velocity()[s.start:s.stop]

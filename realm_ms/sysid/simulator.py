@@ -18,7 +18,7 @@ Where time goes (2-core CPU, 500 arms): PhysX step ~60 %, per-articulation get/s
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -33,6 +33,14 @@ class SimConfig:
     gains: str = "polymetis"
     joint_physics: str = "none"
     coriolis_feedforward: bool = True
+    model_rate: str | None = None  # DroidControlConfig.model_rate; None = the benchmark's default
+
+    def control_config(self):
+        from realm_ms.agents.droid_controller import DroidControlConfig
+
+        kw = {} if self.model_rate is None else {"model_rate": self.model_rate}
+        return DroidControlConfig(gains=self.gains, coriolis_feedforward=self.coriolis_feedforward,
+                                  joint_physics=self.joint_physics, **kw)
 
     @classmethod
     def from_model(cls, model) -> "SimConfig":
@@ -83,23 +91,22 @@ class ReplaySimulator:
     def _driver(self, num_envs: int, actuation: ActuationModel):
         from realm_ms.agents.droid_controller import DroidArmDriver, DroidControlConfig
 
-        cfg = DroidControlConfig(gains=self.config.gains, coriolis_feedforward=self.config.coriolis_feedforward)
+        cfg = DroidControlConfig(
+            gains=self.config.gains, coriolis_feedforward=self.config.coriolis_feedforward, joint_physics=self.config.joint_physics
+        )
         return DroidArmDriver(self.model, cfg, num_envs, "cpu", actuation)
 
     def _ensure(self, n: int) -> None:
-        from realm_ms.agents.droid_controller import JOINT_PHYSICS_PRESETS, resolve
+        from realm_ms.agents.droid_controller import configure_arm_joints
 
         if len(self.arms) >= n:
             return
-        physics = resolve(self.config.joint_physics, JOINT_PHYSICS_PRESETS, "joint physics")
-        damping = self._driver(1, ActuationModel()).implicit_damping.numpy()
+        driver = self._driver(1, ActuationModel())
         while len(self.arms) < n:
             art = self._loader.load(str(self.urdf))
             art.set_sleep_threshold(0.0)
-            for i, joint in enumerate(art.get_active_joints()):  # as DroidJointImpedanceController.set_drive_property
-                joint.set_drive_properties(0.0, float(damping[i]), force_limit=1e6, mode="force")
-                joint.set_friction(float(physics.friction[i]))
-                joint.set_armature([float(physics.armature[i])])
+            # the benchmark's joint contract (DroidJointImpedanceController.set_drive_property)
+            configure_arm_joints([[j] for j in art.get_active_joints()], driver)
             for link in art.get_links():
                 link.set_disable_gravity(False)
             self.arms.append(art)

@@ -49,27 +49,29 @@ def simulate_trajectories(model: RobotModel, commands: list[np.ndarray], control
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.simulator import SimConfig
 
+    from realm_ms.sysid.replay import held_commands
+
     ev = evaluator or Evaluator(SimConfig.from_model(model), workers=1, device="cpu")
     dt = 1.0 / model.physics_hz
-    n_settle = int(round(settle_s * control_hz))
-    cmds = [np.concatenate([np.repeat(c[:1], n_settle, 0), c], 0) for c in commands]
-    steps = max(int(np.ceil((len(c) - 1) / control_hz / dt)) for c in cmds) + 1
-    cmd_steps = np.zeros((len(cmds), steps, 7))
-    for i, c in enumerate(cmds):
-        k = np.minimum((np.arange(steps) * dt * control_hz + 1e-9).astype(int), len(c) - 1)
-        cmd_steps[i] = c[k]
-    q0 = np.stack([c[0] for c in cmds])
-    hist = ev.rollout(q0, np.zeros_like(q0), cmd_steps, model.actuation().stages)
-    out = []
-    for i, c in enumerate(commands):
+    logs = []
+    for c in commands:
         duration = (len(c) - 1) / control_hz
         t = np.arange(int(np.floor(duration * rate_hz + 1e-9)) + 1) / rate_hz
+        q_cmd = c[np.minimum((t * control_hz + 1e-9).astype(int), len(c) - 1)]
+        logs.append((t, q_cmd))
+    # the truth is simulated from the *logged* command (held from t[i] to t[i+1]), exactly the
+    # convention the replay uses, after ``settle_s`` of holding the first target
+    steps = max(int(np.ceil((t[-1] + settle_s) / dt)) for t, _ in logs) + 1
+    cmd_steps = np.stack([held_commands(np.r_[0.0, t + settle_s], np.vstack([q[:1], q]), steps, dt) for t, q in logs])
+    q0 = np.stack([q[0] for _, q in logs])
+    hist = ev.rollout(q0, np.zeros_like(q0), cmd_steps, model.actuation().stages)
+    out = []
+    for i, (t, q_cmd) in enumerate(logs):
         pos = (t + settle_s) / dt
         lo = np.clip(np.floor(pos).astype(int), 0, steps - 1)
         hi = np.clip(lo + 1, 0, steps)
         w = (pos - lo)[:, None]
         q = hist[i, lo] * (1 - w) + hist[i, hi] * w
-        q_cmd = c[np.minimum((t * control_hz + 1e-9).astype(int), len(c) - 1)]
         out.append((t, q, q_cmd))
     return out
 

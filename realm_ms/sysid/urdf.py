@@ -15,6 +15,10 @@ import os
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 BASE_LINK = "panda_link0"

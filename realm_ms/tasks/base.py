@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 import sapien
 import torch
 from mani_skill.envs.sapien_env import BaseEnv
@@ -24,18 +23,13 @@ from mani_skill.utils.structs.types import GPUMemoryConfig, SceneConfig, SimConf
 
 from realm_ms.agents.droid_controller import DroidControlConfig
 from realm_ms.agents.panda_droid import PandaDroid
-from realm_ms.rendering import shader_config
+from realm_ms.rendering import shader_config, vertical_fov
 from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
 from realm_ms.tasks.scenes import get_scene
 from realm_ms.tasks.spec import CameraSpec, TaskSpec
 
-NATIVE_RESOLUTION = (1280, 720)
-
-
-def vertical_fov(hfov_deg: float, width: int, height: int) -> float:
-    """ManiSkill cameras take the vertical FOV; DROID specs give the horizontal one."""
-    return 2 * np.arctan(np.tan(np.deg2rad(hfov_deg) / 2) * height / width)
+NATIVE_RESOLUTION = (1280, 720)  # DROID cameras; pass camera_width=1280, camera_height=720 for full frames
 
 
 class RealmEnv(BaseEnv):
@@ -182,23 +176,25 @@ class RealmEnv(BaseEnv):
 
     # ------------------------------------------------------------------ evaluation
     def stage_inputs(self) -> StageInputs:
+        """Lazy inputs of the rubric's predicates (see ``StageInputs``)."""
         main = self.main
         x = StageInputs(
-            obj_pos=main.anchor_pos(),
+            obj_pos=main.anchor_pos,
             obj_pos0=self._obj_pos0,
-            finger_pos=self.agent.finger_positions(),
-            touching=self.agent.is_touching(main.touch_entities()),
-            grasped=self.agent.is_grasping(main.entity) if not main.is_articulated else torch.zeros(self.num_envs, dtype=torch.bool, device=self.device),
-            obj_quat=main.pose.q,
+            finger_pos=self.agent.finger_positions,
+            touching=lambda: self.agent.is_touching(main.touch_entities()),
+            grasped=(lambda: self.agent.is_grasping(main.entity)) if not main.is_articulated else (lambda: torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)),
+            obj_quat=lambda: main.pose.q,
             obj_quat0=self._obj_quat0,
         )
         if self.target is not None:
-            x.target_pos = self.target.anchor_pos()
-            x.placed_into = self.target.contains(main)
-            x.placed_onto = self.target.supports(main, self.scene)
+            target = self.target
+            x.target_pos = target.anchor_pos
+            x.placed_into = lambda: target.contains(main)
+            x.placed_onto = lambda: target.supports(main, self.scene)
         if main.is_articulated:
-            x.openness, x.openness0 = main.openness(), self._openness0
-            x.toggled = main.toggled()
+            x.openness, x.openness0 = main.openness, self._openness0
+            x.toggled = main.toggled
             x.extra["opening"] = self.task_spec.skill != "close_drawer"
         return x
 
@@ -206,16 +202,15 @@ class RealmEnv(BaseEnv):
         if not hasattr(self, "_settle_left"):
             z = torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)
             return {"success": z, "progression": z.float()}
-        self.tracker.update(self.stage_inputs())
-        self.tracker.met[self._settle_left > 0] = False  # nothing counts before the reference exists
-        success = self.tracker.success
-        info = {
-            "success": success,
+        settled = self._settle_left == 0
+        self.tracker.met[~settled] = False  # nothing counts before the reference exists
+        self.tracker.update(self.stage_inputs(), active=settled)
+        return {
+            "success": self.tracker.success,
             "progression": self.tracker.progression,
-            "settled": self._settle_left == 0,
+            "settled": settled,
             **self.tracker.info(),
         }
-        return info
 
     def step(self, action):
         obs, reward, _, truncated, info = super().step(action)
@@ -233,6 +228,9 @@ class RealmEnv(BaseEnv):
             out.update(obj_pose=self.main.pose.raw_pose, obj_pos0=self._obj_pos0)
             if self.target is not None:
                 out["target_pose"] = self.target.pose.raw_pose
+            if self.main.is_articulated:  # drawer openness fraction / switch state
+                out["openness"] = self.main.openness()[:, None]
+                out["toggled"] = self.main.toggled()[:, None].float()
         return out
 
     def compute_sparse_reward(self, obs, action, info):

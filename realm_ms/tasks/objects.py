@@ -16,7 +16,7 @@ import torch
 from mani_skill.utils.structs.pose import Pose
 
 from realm_ms.contacts import any_contact
-from realm_ms.tasks.progression import quat_to_matrix
+from realm_ms.tasks.progression import quat_apply, quat_to_matrix
 from realm_ms.tasks.spec import SceneObject
 
 # asset prefix -> builder(env, SceneObject) -> task object (articulated objects register here)
@@ -90,7 +90,7 @@ class RigidTaskObject(TaskObject):
 
     def anchor_pos(self) -> torch.Tensor:
         pose = self.entity.pose
-        return pose.p + (quat_to_matrix(pose.q) @ self._centre)
+        return pose.p + quat_apply(pose.q, self._centre)
 
     def touch_entities(self) -> list:
         return [self.entity]

@@ -16,7 +16,7 @@ with the original's pitfalls fixed (section 10):
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable
 
 import torch
@@ -68,24 +68,47 @@ class Thresholds:
     close_fractions: tuple[float, float, float] = (0.875, 0.35, 0.05)
 
 
-@dataclass
 class StageInputs:
-    """Batched quantities the predicates read; the env fills what its skill needs (B = num_envs)."""
+    """Batched quantities the predicates read (B = num_envs); the env fills what its skill needs.
 
-    obj_pos: torch.Tensor  # (B,3) main object (or drawer handle / switch) origin
-    obj_pos0: torch.Tensor  # (B,3) reference captured after settling
-    finger_pos: torch.Tensor  # (B,2,3) inner finger pads
-    touching: torch.Tensor  # (B,) robot touches the main object
-    grasped: torch.Tensor  # (B,) real two-pad grasp
-    obj_quat: torch.Tensor | None = None  # (B,4) wxyz
-    obj_quat0: torch.Tensor | None = None
-    target_pos: torch.Tensor | None = None  # (B,3)
-    placed_into: torch.Tensor | None = None  # (B,) geometric inside-check
-    placed_onto: torch.Tensor | None = None  # (B,) geometric on-top-check
-    toggled: torch.Tensor | None = None  # (B,) switch state
-    openness: torch.Tensor | None = None  # (B,) drawer opening in [0,1]
-    openness0: torch.Tensor | None = None
-    extra: dict = field(default_factory=dict)
+    Each field is a tensor or a zero-argument callable evaluated on first use, so a step only pays
+    for what the stages being checked read (contact queries cost more than the physics on CPU).
+
+    obj_pos (B,3) main object (drawer handle / switch) anchor; obj_pos0 reference after settling;
+    finger_pos (B,2,3) inner finger pads; touching, grasped (B,) bool; obj_quat, obj_quat0 (B,4)
+    wxyz; target_pos (B,3); placed_into, placed_onto (B,) geometric checks; toggled (B,) switch
+    state; openness, openness0 (B,) drawer opening in [0,1]; extra: dict.
+    """
+
+    FIELDS = (
+        "obj_pos", "obj_pos0", "finger_pos", "touching", "grasped", "obj_quat", "obj_quat0", "target_pos",
+        "placed_into", "placed_onto", "toggled", "openness", "openness0", "extra",
+    )
+
+    def __init__(self, **fields):
+        unknown = set(fields) - set(self.FIELDS)
+        if unknown:
+            raise TypeError(f"unknown stage inputs {sorted(unknown)}; known: {self.FIELDS}")
+        self.__dict__.update(dict.fromkeys(self.FIELDS), extra={})
+        self.__dict__.update(fields)
+
+    def __getattribute__(self, name: str):
+        v = object.__getattribute__(self, name)
+        if name in StageInputs.FIELDS and callable(v) and not isinstance(v, torch.Tensor):
+            v = self.__dict__[name] = v()
+        return v
+
+    def __setattr__(self, name: str, value) -> None:
+        if name not in self.FIELDS:
+            raise AttributeError(f"unknown stage input {name!r}")
+        self.__dict__[name] = value
+
+
+def quat_apply(q: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+    """Rotate vectors v (..., 3) by unit quaternions q (..., 4) wxyz."""
+    w, u = q[..., :1], q[..., 1:]
+    uv = torch.linalg.cross(u, v.expand_as(u), dim=-1)
+    return v + 2 * (w * uv + torch.linalg.cross(u, uv, dim=-1))
 
 
 def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
@@ -113,6 +136,11 @@ def rotation_vector_z(quat: torch.Tensor, quat0: torch.Tensor) -> torch.Tensor:
     return angle * kz
 
 
+def _reach(x: StageInputs, t: Thresholds) -> torch.Tensor:
+    near = ((x.finger_pos - x.obj_pos[:, None]).norm(dim=-1) < t.reach_dist).any(-1)
+    return near if bool(near.all()) else near | x.touching  # contact query only when needed
+
+
 def _lift(x: StageInputs, dz: float, dist: float) -> torch.Tensor:
     d = x.obj_pos - x.obj_pos0
     return (d[:, 2] > dz) & (d.norm(dim=-1) > dist)
@@ -125,7 +153,7 @@ def _moved(x: StageInputs, t: Thresholds, opening: bool) -> torch.Tensor:
 
 Predicate = Callable[[StageInputs, Thresholds], torch.Tensor]
 PREDICATES: dict[Stage, Predicate] = {
-    S.REACH: lambda x, t: ((x.finger_pos - x.obj_pos[:, None]).norm(dim=-1) < t.reach_dist).any(-1) | x.touching,
+    S.REACH: lambda x, t: _reach(x, t),
     S.GRASP: lambda x, t: x.grasped,
     S.TOUCH: lambda x, t: x.touching,
     S.LIFT_SLIGHT: lambda x, t: _lift(x, t.lift_slight_dz, t.lift_slight_dist),
@@ -166,12 +194,22 @@ class ProgressionTracker:
         """Unlatched predicate values (B, N), for unit tests and diagnostics."""
         return torch.stack([PREDICATES[s](x, self.thresholds) for s in self.stages], dim=1)
 
-    def update(self, x: StageInputs) -> torch.Tensor:
-        """Latch newly met stages in order; returns progression (B,) in [0, 1]."""
-        now = self.evaluate_stages(x)
-        for k in range(len(self.stages)):
-            prior = self.met[:, :k].all(dim=1) if k else torch.ones_like(self.met[:, 0])
-            self.met[:, k] |= prior & now[:, k]
+    def update(self, x: StageInputs, active: torch.Tensor | None = None) -> torch.Tensor:
+        """Latch newly met stages in order; returns progression (B,) in [0, 1].
+
+        Only the frontier is evaluated: a stage whose predecessors are not all met, or which is
+        already latched, in every env cannot change, so its predicate (and its inputs) are skipped.
+        ``active`` (B,) masks envs whose stages may latch at all (e.g. reference not captured yet).
+        """
+        for k, stage in enumerate(self.stages):
+            candidates = ~self.met[:, k]
+            if k:
+                candidates &= self.met[:, :k].all(dim=1)
+            if active is not None:
+                candidates &= active
+            if not bool(candidates.any()):
+                continue
+            self.met[:, k] |= candidates & PREDICATES[stage](x, self.thresholds)
         return self.progression
 
     @property

@@ -43,8 +43,8 @@ class CameraSpec:
 
 
 DEFAULT_CAMERAS = (
-    CameraSpec("exterior_1", eye=(0.10, 0.62, 0.52), target=(0.55, 0.0, 0.02)),
-    CameraSpec("exterior_2", eye=(0.10, -0.62, 0.52), target=(0.55, 0.0, 0.02)),
+    CameraSpec("exterior_1", eye=(0.35, 0.72, 0.50), target=(0.50, 0.0, 0.0)),
+    CameraSpec("exterior_2", eye=(0.35, -0.72, 0.50), target=(0.50, 0.0, 0.0)),
 )
 
 

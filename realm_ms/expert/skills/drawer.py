@@ -1,11 +1,12 @@
-"""open_drawer / close_drawer: grasp the top drawer's bar handle top-down (fingers straddling the
-bar along the pull axis), pull it out (or push it in) along the cabinet's axis, release, retreat."""
+"""Shared drawer motion for open_drawer / close_drawer: grasp the top drawer's bar handle top-down
+(fingers straddling the bar along the pull axis), pull it out (or push it in) along the cabinet's
+axis, release, retreat; retried while the drawer is short of its goal."""
 
 import math
 
 import numpy as np
 
-from realm_ms.expert.primitives import DEFAULT_YAW, OPEN, approach, close, descend, hold, move, release
+from realm_ms.expert.primitives import DEFAULT_YAW, approach, close, descend, hold, move, release
 
 
 def _handle(ctx, cab):
@@ -17,7 +18,7 @@ def _handle(ctx, cab):
     return h, axis, yaw
 
 
-def _move_drawer(ctx, opening: bool, tries: int = 3):
+def move_drawer(ctx, opening: bool, tries: int = 3):
     cab = ctx.env.main
     travel = cab.geom.travel
     goal = (lambda: float(cab.openness()[ctx.i]) > 0.97) if opening else (lambda: float(cab.openness()[ctx.i]) < 0.03)
@@ -38,10 +39,3 @@ def _move_drawer(ctx, opening: bool, tries: int = 3):
         ctx.log.append(f"drawer attempt {attempt}: openness {float(cab.openness()[ctx.i]):.2f}")
     yield from hold(ctx, 20)
 
-
-def open_drawer(ctx):
-    yield from _move_drawer(ctx, opening=True)
-
-
-def close_drawer(ctx):
-    yield from _move_drawer(ctx, opening=False)

@@ -1,6 +1,5 @@
 """pick: grasp the main object top-down and lift it well clear (REACH -> GRASP -> LIFT_LARGE)."""
 
-import numpy as np
 
 from realm_ms.expert.primitives import grasp, hold, lift, release
 

@@ -3,7 +3,7 @@ centre (REACH -> TOUCH -> TOGGLED_ON)."""
 
 import numpy as np
 
-from realm_ms.expert.primitives import CLOSED, approach, hold, move
+from realm_ms.expert.primitives import CLOSED, approach, hold, move, nearest_yaw
 
 
 def push(ctx, tries: int = 3):
@@ -11,8 +11,8 @@ def push(ctx, tries: int = 3):
     for attempt in range(tries):
         pos, r = ctx.obj_pose(sw)
         press = pos + r @ np.asarray(sw.press_point_local(), float)
-        yaw = float(np.arctan2(r[1, 0], r[0, 0])) + np.pi / 2  # fingers side by side across the rocker
-        yaw = (yaw + np.pi / 2) % np.pi - np.pi / 2 - np.pi / 4 * 0  # keep within +-pi/2
+        # closing axis across the rocker: both (closed) fingers press side by side on its raised end
+        yaw = nearest_yaw([float(np.arctan2(r[1, 0], r[0, 0])) + np.pi / 2])
         yield from approach(ctx, press, yaw, clearance=0.08, grip_value=CLOSED)
         # pads end 4 mm below the TCP; go 2 cm below the raised end to press it through
         yield from move(ctx, press + np.array([0, 0, -0.02 - 0.005 * attempt]), speed=0.05, tol=0.004, settle=15)

@@ -32,7 +32,7 @@ def place_on(ctx, obj, target, drop: float = 0.02, align_yaw=None, tries: int = 
         yield from release(ctx, steps=10)
         yield from move(ctx, ctx.cmd.p + np.array([0, 0, 0.10]), speed=0.12, settle=5)
         yield from hold(ctx, 10)
-        if bool(ctx.env.evaluate()["success"][ctx.i]):
+        if bool(ctx.env.tracker.success[ctx.i]):
             return True
         ctx.log.append(f"place attempt {attempt} failed")
     return False

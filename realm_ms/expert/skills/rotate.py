@@ -49,7 +49,7 @@ def rotate(ctx, tries: int = 3):
         yield from release(ctx)
         yield from lift(ctx, 0.08)
         yield from hold(ctx, 5)
-        if bool(ctx.env.evaluate()["success"][ctx.i]):
+        if bool(ctx.env.tracker.success[ctx.i]):
             break
         ctx.log.append(f"rotate attempt {attempt} failed")
     yield from hold(ctx, 20)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import torch
 
-from realm_ms.sysid.effects.base import Effect, EffectConfig, model_gravity
+from realm_ms.sysid.effects.base import Effect, EffectConfig, model_gravity, scatter_rows
 from realm_ms.sysid.parameter import ParamSpec
 
 
@@ -29,9 +29,12 @@ class Backlash(Effect):
         return [ParamSpec("half_gap", "rad", 0.002, 0.0, 0.02, 0.0, doc="half of the dead band")]
 
     def measure(self, q, qd, state):
+        rows = self.active_rows(q.device)
+        if rows is not None and rows.numel() == 0:
+            return q, qd
         width = torch.as_tensor(self.config.torque_width, device=q.device, dtype=q.dtype)
-        side = torch.tanh(model_gravity(state) / width)
-        return q + self.p("half_gap", q) * side, qd
+        side = torch.tanh(model_gravity(state, rows) / width)
+        return q + scatter_rows(q, rows, self.p("half_gap", q, rows) * side), qd
 
     def evidence(self, values, features):
         return features.sentence_for(self, values)

@@ -85,6 +85,7 @@ class Effect(ActuationStage):
             if not lo <= float(row[i]) <= hi:
                 raise ValueError(f"{p.key} = {float(row[i]):g} {p.unit} is outside its bounds [{lo:g}, {hi:g}]")
         self.theta = row[None]
+        self._rows_cache = None
 
     def values(self, row: int = 0) -> dict[str, float]:
         return {p.local_key: float(self.theta[min(row, self.theta.shape[0] - 1), i]) for i, p in enumerate(self.params)}
@@ -95,13 +96,30 @@ class Effect(ActuationStage):
         if theta.ndim != 2 or theta.shape[1] != len(self.params):
             raise ValueError(f"{self.name}: theta must be (B, {len(self.params)}), got {tuple(theta.shape)}")
         self.theta = theta
+        self._rows_cache = None
 
-    def p(self, name: str, like: torch.Tensor | None = None) -> torch.Tensor:
-        """Values of one spec, (B, 7) or (B, 1), on ``like``'s device."""
-        v = self.theta[:, self._slices[name]]
-        if like is not None and v.device != like.device:
+    def active_rows(self, device=None) -> torch.Tensor | None:
+        """Indices of the envs where this effect is not at its off-value (None = all / broadcast).
+        Expensive hooks compute only there: a screening batch holds many effects, each active on a
+        few rows."""
+        if self.theta.shape[0] == 1:
+            return None
+        if getattr(self, "_rows_cache", None) is None or (device is not None and self._rows_cache[1] != device):
+            off = torch.tensor([p.spec.off for p in self.params], dtype=self.theta.dtype, device=self.theta.device)
+            act = (self.theta != off).any(dim=1)
+            rows = None if bool(act.all()) else torch.nonzero(act)[:, 0]
+            if rows is not None and device is not None:
+                rows = rows.to(device)
+            self._rows_cache = (rows, device)
+        return self._rows_cache[0]
+
+    def p(self, name: str, like: torch.Tensor | None = None, rows: torch.Tensor | None = None) -> torch.Tensor:
+        """Values of one spec, (B, 7) or (B, 1), on ``like``'s device (only ``rows`` if given)."""
+        if like is not None and self.theta.device != like.device:
             self.theta = self.theta.to(like.device)
-            v = self.theta[:, self._slices[name]]
+        v = self.theta[:, self._slices[name]]
+        if rows is not None:
+            v = v[rows]
         return v
 
     def is_off(self) -> bool:
@@ -243,19 +261,39 @@ def _matrix_to_quat(m: np.ndarray) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------- shared numerics
-def model_gravity(state: ControlState) -> torch.Tensor:
-    """g_model(q) of the controller's own model at the true state, cached for this physics step."""
-    g = state.extra.get("gravity_model")
-    if g is None:
-        g = state.extra["gravity_model"] = state.model.rnea(state.q, torch.zeros_like(state.qd))
-    return g
+def _model_terms(state: ControlState) -> tuple[torch.Tensor, torch.Tensor]:
+    """(C(q, qd) qd + g(q), g(q)) of the controller's model at the true state for the whole batch,
+    in one batched RNEA call, cached for this physics step. Computing all rows once is cheaper than
+    per-effect subsets: at these batch sizes the call overhead dominates."""
+    terms = state.extra.get("_sysid_terms")
+    if terms is None:
+        b = state.q.shape[0]
+        out = state.model.rnea(torch.cat([state.q, state.q]), torch.cat([state.qd, torch.zeros_like(state.qd)]))
+        terms = state.extra["_sysid_terms"] = (out[:b], out[b:])
+    return terms
 
 
-def model_bias(state: ControlState) -> torch.Tensor:
-    b = state.extra.get("bias_model")
+def model_gravity(state: ControlState, rows: torch.Tensor | None = None) -> torch.Tensor:
+    """g_model(q) of the controller's own model at the true state (``rows`` only), cached per step."""
+    g = _model_terms(state)[1]
+    return g if rows is None else g[rows]
+
+
+def model_bias(state: ControlState, rows: torch.Tensor | None = None) -> torch.Tensor:
+    """C(q, qd) qd + g(q) of the controller's model; the driver's own value when it shares it
+    (``state.extra["bias"]``, at the measured state), else computed here."""
+    b = state.extra.get("bias")
     if b is None:
-        b = state.extra["bias_model"] = state.model.bias_torque(state.q, state.qd)
-    return b
+        b = _model_terms(state)[0]
+    return b if rows is None else b[rows]
+
+
+def scatter_rows(full_like: torch.Tensor, rows: torch.Tensor | None, part: torch.Tensor) -> torch.Tensor:
+    if rows is None:
+        return part
+    out = torch.zeros_like(full_like)
+    out[rows] = part
+    return out
 
 
 class ImplicitJointTorque(Effect):
@@ -282,26 +320,47 @@ class ImplicitJointTorque(Effect):
             self._stale[env_idx] = True
 
     def _joint_inertia(self, state: ControlState) -> torch.Tensor:
+        """SAFETY / (M^-1)_jj for every env (rows where the effect is off keep a placeholder 1)."""
+        rows = self.active_rows(state.q.device)
         if getattr(self, "_inertia", None) is None or self._inertia.shape[0] != state.q.shape[0]:
-            minv = torch.linalg.inv(state.model.mass_matrix(state.q))
-            self._inertia = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
-            self._stale = torch.zeros(state.q.shape[0], dtype=torch.bool, device=state.q.device)
-        elif bool(self._stale.any()):
-            rows = torch.nonzero(self._stale)[:, 0]
-            minv = torch.linalg.inv(state.model.mass_matrix(state.q[rows]))
-            self._inertia[rows] = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
-            self._stale[:] = False
+            self._inertia = torch.ones_like(state.q)
+            self._stale = torch.ones(state.q.shape[0], dtype=torch.bool, device=state.q.device)
+        need = self._stale.clone()
+        if rows is not None:
+            mask = torch.zeros_like(need)
+            mask[rows] = True
+            need &= mask
+        if bool(need.any()):
+            idx = torch.nonzero(need)[:, 0]
+            minv = torch.linalg.inv(state.model.mass_matrix(state.q[idx]))
+            self._inertia[idx] = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
+            self._stale[idx] = False
         return self._inertia
 
     def actuator(self, tau, state):
         state.extra["tau_motor"] = tau
         return tau
 
-    def free_velocity(self, state: ControlState) -> tuple[torch.Tensor, torch.Tensor]:
-        """(v_free, I_j): the velocity this step would end with without this effect, and I_j."""
+    def free_velocity(self, state: ControlState, rows: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """(v_free, I_j) on ``rows``: the velocity this step would end with without this effect."""
         inertia = self._joint_inertia(state)
+        qd = state.qd
+        if rows is not None:
+            inertia, qd = inertia[rows], qd[rows]
         tau = state.extra.get("tau_motor")
         if tau is None:
-            return state.qd, inertia
-        net = tau - model_bias(state)
-        return state.qd + state.dt * net / inertia, inertia
+            return qd, inertia
+        if rows is not None:
+            tau = tau[rows]
+        net = tau - model_bias(state, rows)
+        return qd + state.dt * net / inertia, inertia
+
+    def plant_torque(self, state):
+        rows = self.active_rows(state.q.device)
+        if rows is not None and rows.numel() == 0:
+            return None
+        v_free, inertia = self.free_velocity(state, rows)
+        return scatter_rows(state.q, rows, self.friction_torque(v_free, inertia, state, rows))
+
+    def friction_torque(self, v_free, inertia, state, rows) -> torch.Tensor:
+        raise NotImplementedError

@@ -33,9 +33,8 @@ class CoulombFriction(ImplicitJointTorque):
                       doc="half the difference F+ - F-"),
         ]
 
-    def plant_torque(self, state):
-        v_free, inertia = self.free_velocity(state)
-        fc, fa = self.p("fc", v_free), self.p("fc_asym", v_free)
+    def friction_torque(self, v_free, inertia, state, rows):
+        fc, fa = self.p("fc", v_free, rows), self.p("fc_asym", v_free, rows)
         # F+ / F- blended smoothly around v = 0 (tanh), so the asymmetry has no discontinuity
         direction = torch.tanh(v_free / self.config.direction_velocity)
         level = torch.clamp(fc + fa * direction, min=0)

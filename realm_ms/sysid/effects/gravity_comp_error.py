@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from realm_ms.sysid.effects.base import Effect, model_gravity
+from realm_ms.sysid.effects.base import Effect, model_gravity, scatter_rows
 from realm_ms.sysid.parameter import ParamSpec
 
 
@@ -18,7 +18,10 @@ class GravityCompError(Effect):
                           doc="relative error of the compensated gravity torque")]
 
     def actuator(self, tau, state):
-        return tau + self.p("scale", tau) * model_gravity(state)
+        rows = self.active_rows(tau.device)
+        if rows is not None and rows.numel() == 0:
+            return tau
+        return tau + scatter_rows(tau, rows, self.p("scale", tau, rows) * model_gravity(state, rows))
 
     def evidence(self, values, features):
         return features.sentence_for(self, values)

@@ -25,10 +25,9 @@ class StribeckFriction(ImplicitJointTorque):
             ParamSpec("vs", "rad/s", 0.05, 0.005, 0.5, 0.05, per_joint=False, scale="log", doc="Stribeck velocity"),
         ]
 
-    def plant_torque(self, state):
-        v_free, inertia = self.free_velocity(state)
-        fs, ratio, vs = self.p("fs", v_free), self.p("fc_ratio", v_free), self.p("vs", v_free)
-        speed = torch.abs(state.qd)
+    def friction_torque(self, v_free, inertia, state, rows):
+        fs, ratio, vs = self.p("fs", v_free, rows), self.p("fc_ratio", v_free, rows), self.p("vs", v_free, rows)
+        speed = torch.abs(state.qd if rows is None else state.qd[rows])
         f = fs * (ratio + (1 - ratio) * torch.exp(-((speed / vs) ** 2)))
         stop = inertia * v_free / state.dt
         return -torch.maximum(torch.minimum(stop, f), -f)

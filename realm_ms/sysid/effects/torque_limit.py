@@ -21,7 +21,7 @@ class TorqueLimit(Effect):
         return [
             ParamSpec("rate_limit", "N·m/s", 1000.0, 50.0, 1e5, 1e5, per_joint=False, scale="log",
                       doc="maximum torque rate (libfranka: 1000 N·m/s); 1e5 = off"),
-            ParamSpec("effort_scale", "1", 0.5, 0.05, 1.0, 1.0, per_joint=False,
+            ParamSpec("effort_scale", "1", 0.8, 0.05, 1.0, 1.0, per_joint=False,
                       doc="saturation as a fraction of the nominal 87/12 N·m limits; 1 = off"),
         ]
 

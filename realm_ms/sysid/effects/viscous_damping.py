@@ -16,9 +16,8 @@ class ViscousDamping(ImplicitJointTorque):
     def param_specs(cls, config):
         return [ParamSpec("b", "N·m·s/rad", 0.5, 0.0, 10.0, 0.0, doc="viscous friction coefficient")]
 
-    def plant_torque(self, state):
-        v_free, inertia = self.free_velocity(state)
-        b = self.p("b", v_free)
+    def friction_torque(self, v_free, inertia, state, rows):
+        b = self.p("b", v_free, rows)
         return -b * v_free / (1.0 + state.dt * b / inertia)
 
     def evidence(self, values, features):

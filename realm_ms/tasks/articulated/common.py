@@ -8,7 +8,6 @@ import torch
 from mani_skill.utils.structs.pose import Pose
 
 from realm_ms.tasks.objects import TaskObject, yaw_quat
-from realm_ms.tasks.progression import quat_to_matrix
 
 
 def mat(rgba, roughness=0.6, metallic=0.0):
@@ -39,11 +38,6 @@ class ArticulatedTaskObject(TaskObject):
     @property
     def entity(self):  # what perturbations / generic code may treat as "the object"
         return self.art
-
-    def _local_to_world(self, local: torch.Tensor, link=None) -> torch.Tensor:
-        pose = (link or self.art.root).pose
-        r = quat_to_matrix(pose.q)
-        return pose.p + (r @ local.to(pose.p.device)[..., None])[..., 0] if local.dim() == 2 else pose.p + r @ local.to(pose.p.device)
 
     def set_pose(self, p: torch.Tensor, yaw: torch.Tensor) -> None:
         self.art.set_root_pose(Pose.create_from_pq(p.to(self.device), yaw_quat(yaw).to(self.device)))

@@ -29,7 +29,7 @@ from realm_ms.tasks.progression import quat_to_matrix
 class CabinetGeometry:
     depth: float = 0.36  # x
     width: float = 0.44  # y
-    height: float = 0.32  # z (top drawer handle ~0.24 m above the table)
+    height: float = 0.30  # z (top drawer handle 0.245 m above the table, 12 cm below the fingers at reset)
     panel: float = 0.015
     n_drawers: int = 3
     travel: float = 0.22  # m, full opening of a drawer
@@ -68,7 +68,6 @@ class DrawerCabinet(ArticulatedTaskObject):
         self.drawers = [self.art.links_map[f"drawer_{k}"] for k in range(g.n_drawers)]
         self.joints = [self.art.joints_map[f"drawer_{k}_joint"] for k in range(g.n_drawers)]
         self.top = self.drawers[-1]
-        self.top_joint_index = self.art.active_joints.index(self.joints[-1]) if hasattr(self.art, "active_joints") else g.n_drawers - 1
         self._handle_local = torch.tensor([-g.handle_standoff, 0.0, 0.0], device=self.device)
 
     # ---------------------------------------------------------------- building
@@ -116,7 +115,10 @@ class DrawerCabinet(ArticulatedTaskObject):
             for s in (-1, 1):
                 box(lb, (-sx / 2, s * (g.handle_length / 2 - 0.01), 0), (sx / 2, 0.006, 0.006), handle_m, density=1000)
         ab.initial_pose = sapien.Pose([0, 0, -2.0])
-        return ab.build(name=name, fix_root_link=True)
+        art = ab.build(name=name, fix_root_link=True)
+        for j in art.active_joints:  # damping only (PhysX joint friction is load-proportional)
+            j.set_friction(0.0)
+        return art
 
     # ---------------------------------------------------------------- state
     def _qpos_top(self) -> torch.Tensor:

@@ -29,7 +29,7 @@ from realm_ms.tasks.progression import quat_to_matrix
 class SwitchGeometry:
     base_half: tuple = (0.06, 0.045, 0.02)  # x, y, z half sizes of the housing
     rocker_half: tuple = (0.045, 0.032, 0.007)
-    pivot_height: float = 0.008  # rocker plate centre above the pivot (puts the CoM above it)
+    pivot_height: float = 0.018  # rocker plate centre above the pivot (CoM above it; plate clears the housing at +-tilt)
     tilt: float = 0.21  # rad, rest angle at either limit (~12 deg)
     on_threshold: float = 0.0  # rad, toggled when q > threshold
     joint_friction: float = 0.0
@@ -71,9 +71,15 @@ class LightSwitch(ArticulatedTaskObject):
             friction=g.joint_friction, damping=g.joint_damping,
         )
         box(lb, (0, 0, g.pivot_height), (rx, ry, rz), mat(g.rocker_rgba, 0.35), density=g.rocker_density)
+        box(lb, (0, 0, (g.pivot_height - rz) / 2), (0.008, ry * 0.9, (g.pivot_height - rz) / 2), mat(g.base_rgba, 0.5), collision=False)  # pivot web
         box(lb, (rx * 0.55, 0, g.pivot_height + rz + 0.0005), (rx * 0.3, ry * 0.6, 0.0005), mat(g.on_rgba, 0.4), collision=False)
         ab.initial_pose = sapien.Pose([0, 0, -2.0])
-        return ab.build(name=name, fix_root_link=True)
+        art = ab.build(name=name, fix_root_link=True)
+        # PhysX joint friction is a load-proportional coefficient (SAPIEN defaults it to 0.05): it would
+        # lock the light rocker; the detent comes from gravity alone
+        for j in art.active_joints:
+            j.set_friction(g.joint_friction)
+        return art
 
     # joint sign: rotating about +y by q tilts the +x end DOWN for q > 0
     def angle(self) -> torch.Tensor:

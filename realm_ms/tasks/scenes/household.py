@@ -53,10 +53,10 @@ class HouseholdScene(TabletopScene):
         fallback = tuple(a) + (1.0,)
         s = self.seed
         makers = {
-            "wood": lambda: tx.wood(a, b, seed=s, rings=14),
+            "wood": lambda: tx.wood(a, b, seed=s, rings=45),
             "planks": lambda: tx.wood(a, b, seed=s + 1, rings=40, planks=8),
             "tiles": lambda: tx.tiles(a, b, (0.75, 0.75, 0.72), n=8, seed=s),
-            "plain_tiles": lambda: tx.tiles(a, a, b, n=6, seed=s, checker=False),
+            "plain_tiles": lambda: tx.tiles(a, a, b, n=12, seed=s, checker=False),
             "fabric": lambda: tx.fabric(a, seed=s),
             "plaster": lambda: tx.plaster(a, seed=s),
         }

@@ -7,7 +7,6 @@ envs with ``render_backend="none"``).
 
 from __future__ import annotations
 
-from functools import lru_cache
 
 import numpy as np
 import sapien

@@ -1,0 +1,77 @@
+"""Wall time of the sysid loop: diagnose + fit for one hidden effect on 10 trajectories x 10 s at
+15 Hz (7 train / 3 held-out), CPU (goal < 3 min on a 2-core machine) and, where CUDA exists, with
+the GPU-parallel population (speed-up recorded).
+
+    python bench/sysid.py [--hidden coulomb_friction:fc=0.3] [--workers N] [--device cpu|cuda|both]
+                          [--out outputs/bench_sysid.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def run(device: str, workers: int, data: Path, hidden: str) -> dict:
+    from realm_ms.sysid.data_io import load_split
+    from realm_ms.sysid.diagnose import diagnose
+    from realm_ms.sysid.engine import Evaluator
+    from realm_ms.sysid.fit import FitConfig, fit
+
+    train, held = load_split(data)
+    ev = Evaluator(workers=workers, device=device)
+    t0 = time.perf_counter()
+    d = diagnose(train, held, evaluator=ev, log=lambda m: print("  " + m, file=sys.stderr))
+    t1 = time.perf_counter()
+    name = d.suspects[0].effect
+    f = fit(train, held, config=FitConfig(add=name), evaluator=ev, progress=True, log=lambda m: print("  " + m, file=sys.stderr))
+    t2 = time.perf_counter()
+    prof = ev.sim.profile.summary() if ev._sim is not None else f"{workers} worker processes"
+    ev.close()
+    return {"device": device, "workers": workers, "diagnose_s": t1 - t0, "fit_s": t2 - t1, "total_s": t2 - t0,
+            "top_suspect": name, "hidden": hidden, "heldout_before_rad": f.before["heldout_rmse_rad"],
+            "heldout_after_rad": f.after["heldout_rmse_rad"], "noise_floor_rad": d.noise_floor,
+            "generations": len(f.history), "params": f.params, "profile": prof}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--hidden", default="coulomb_friction:fc=0.3")
+    ap.add_argument("--workers", type=int, default=int(os.environ.get("REALM_SYSID_WORKERS", 1)))
+    ap.add_argument("--device", choices=["cpu", "cuda", "both"], default="both")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--out", default="outputs/bench_sysid.json")
+    args = ap.parse_args()
+    import torch
+
+    from realm_ms.sysid.synth import SynthConfig, synth
+
+    with tempfile.TemporaryDirectory() as tmp:
+        data = Path(tmp) / "data"
+        synth(args.hidden, data, SynthConfig(seed=args.seed, n_train=7, n_heldout=3, duration_s=10.0, rate_hz=15.0))
+        devices = ["cpu", "cuda"] if args.device == "both" else [args.device]
+        devices = [d for d in devices if d == "cpu" or torch.cuda.is_available()]
+        results = [run(d, args.workers, data, args.hidden) for d in devices]
+    cpu = next((r for r in results if r["device"] == "cpu"), None)
+    for r in results:
+        print(f"{r['device']:>4} (workers={r['workers']}): diagnose {r['diagnose_s']:.1f} s + fit {r['fit_s']:.1f} s = "
+              f"{r['total_s']:.1f} s; top suspect {r['top_suspect']}; held-out {r['heldout_before_rad']:.2e} -> "
+              f"{r['heldout_after_rad']:.2e} rad (noise floor {r['noise_floor_rad']:.2e}); {r['profile']}")
+        if cpu and r["device"] == "cuda":
+            r["speedup_vs_cpu"] = cpu["total_s"] / r["total_s"]
+            print(f"GPU speed-up vs CPU: {r['speedup_vs_cpu']:.2f}x")
+    if cpu:
+        print(f"goal < 180 s on CPU: {'met' if cpu['total_s'] < 180 else 'NOT met'} ({cpu['total_s']:.0f} s)")
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=2, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,159 @@
+"""Python API with the same verbs as ``realm sysid``.
+
+    from realm_ms.sysid import api
+    api.synth("coulomb_friction:fc=0.3", "data/", seed=0)
+    d = api.diagnose("data/")                      # dict, the documented JSON
+    f = api.fit("data/", add="coulomb_friction", out="MODEL.yaml")
+    api.report("data/", model="MODEL.yaml", out="report.html")
+
+Every function takes DATA as a path (npz directory or LeRobot v3.0 dataset) or as
+(train, heldout) lists of :class:`~realm_ms.sysid.timeseries.Trajectory`.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from realm_ms.sysid.timeseries import DataError, Trajectory
+
+
+def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3) -> tuple[list[Trajectory], list[Trajectory]]:
+    if isinstance(data, tuple):
+        return data
+    from realm_ms.sysid.data_io import load_split
+
+    return load_split(data, heldout, seed, heldout_fraction)
+
+
+def _model(model):
+    from realm_ms.sysid.robot_model import RobotModel
+
+    return RobotModel.load(model)
+
+
+def _evaluator(model, workers=None, device=None):
+    from realm_ms.sysid.engine import Evaluator
+    from realm_ms.sysid.simulator import SimConfig
+
+    return Evaluator.auto(SimConfig.from_model(model), workers, device)
+
+
+def effects() -> list[dict[str, Any]]:
+    """The effect library: name, summary, signature and parameters with units, bounds, off-values."""
+    from realm_ms.sysid.effects import EFFECTS, make_effect
+
+    out = []
+    for name, cls in EFFECTS.items():
+        fx = make_effect(name)
+        out.append({
+            "name": name, "summary": cls.summary, "signature": cls.signature,
+            "kind": "build-time" if cls.build_time else "torque-path",
+            "params": [{"name": s.name, "unit": s.unit, "per_joint": s.per_joint, "nominal": s.nominal,
+                        "bounds": [s.lo, s.hi], "off": s.off, "scale": s.scale, "fitted_by_default": s.fit_by_default,
+                        "doc": s.doc} for s in fx.specs],
+        })
+    return out
+
+
+def excite(out: str | Path, n: int = 10, seed: int = 0, **config) -> list[Path]:
+    from realm_ms.sysid.excite import ExciteConfig, write_excitation
+
+    return write_excitation(out, n, seed, ExciteConfig(**config))
+
+
+def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, rate_hz: float = 15.0,
+          workers: int | None = 1, **config) -> dict:
+    from realm_ms.sysid.synth import SynthConfig, synth as _synth
+
+    return _synth(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config))
+
+
+def compare(data, model=None, heldout=None, workers=None, device=None, segment_s: float = 8.0) -> dict:
+    """Replay DATA (all trajectories; plus ``heldout`` if given) with the model."""
+    from realm_ms.sysid.data_io import load_dir
+    from realm_ms.sysid.fit import compare as _compare
+
+    m = _model(model)
+    trajs = data if isinstance(data, list) else load_dir(data)
+    if heldout is not None:
+        trajs = trajs + load_dir(heldout)
+    out = _compare(trajs, m, segment_s=segment_s, evaluator=_evaluator(m, workers, device))
+    return out
+
+
+def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print, **config) -> dict:
+    from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose as _diagnose
+
+    train, held = _split(data, heldout, seed)
+    m = _model(model)
+    d = _diagnose(train, held, m, DiagnoseConfig(**config), _evaluator(m, workers, device), log=log)
+    out = d.to_json()
+    out["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
+    return out
+
+
+def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None,
+        device=None, progress: bool = True, log=print, **config) -> dict:
+    from datetime import datetime, timezone
+
+    from realm_ms.sysid.fit import FitConfig, fit as _fit
+
+    train, held = _split(data, heldout, seed)
+    m = _model(model)
+    res = _fit(train, held, m, FitConfig(add=add, seed=seed, **config), _evaluator(m, workers, device), progress, log)
+    res.model.provenance.update({
+        "data": str(data) if not isinstance(data, tuple) else "in-memory",
+        "train": [t.name for t in train], "heldout": [t.name for t in held],
+        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "fitted": res.effects, "heldout_rmse_rad": res.after["heldout_rmse_rad"],
+        **_versions(),
+    })
+    if out is not None:
+        res.model.save(out)
+    j = res.to_json()
+    j["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
+    j["_model"] = res.model
+    return j
+
+
+def report(data, model=None, out: str | Path = "report.html", heldout=None, seed: int = 0, diagnosis=None,
+           fit_result=None, workers=None, device=None, waterfall: bool = True, log=print) -> Path:
+    from realm_ms.sysid.report import build_report
+
+    train, held = _split(data, heldout, seed)
+    m = _model(model)
+    diagnosis = _load_json(diagnosis, ("baseline", "suspects"), "diagnose --json")
+    fit_result = _load_json(fit_result, ("history", "before", "after"), "fit --json")
+    return build_report(train, held, m, Path(out), _evaluator(m, workers, device), diagnosis=diagnosis,
+                        fit_result=fit_result, waterfall=waterfall, data_name=str(data), log=log)
+
+
+def _load_json(obj, keys: tuple[str, ...], what: str):
+    if not isinstance(obj, (str, Path)):
+        return obj
+    p = Path(obj)
+    try:
+        data = json.loads(p.read_text())
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{p} not found") from None
+    except json.JSONDecodeError as e:
+        raise ValueError(f"{p}: not valid JSON ({e})") from None
+    missing = [k for k in keys if k not in data]
+    if missing:
+        raise ValueError(f"{p}: not a `{what}` output (missing {', '.join(missing)})")
+    return data
+
+
+def _versions() -> dict:
+    out = {}
+    for mod in ("realm_ms", "sapien", "mani_skill", "torch"):
+        try:
+            out[f"{mod}_version"] = str(__import__(mod).__version__)
+        except Exception:  # noqa: BLE001
+            pass
+    return out
+
+
+__all__ = ["effects", "excite", "synth", "compare", "diagnose", "fit", "report", "DataError"]

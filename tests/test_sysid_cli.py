@@ -1,0 +1,118 @@
+"""`realm sysid ...` end to end on a tiny synthetic data set: documented JSON outputs, report,
+clear errors on bad input (exit code 2, one line, no traceback)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from realm_ms.cli import main
+
+
+def run(capsys, *argv):
+    code = main(["sysid", *map(str, argv)])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli") / "data"
+    assert main(["sysid", "synth", "--hidden", "latency:delay=0.02", "--out", str(d), "--seed", "1",
+                 "--n-train", "3", "--n-heldout", "2", "--duration", "5"]) == 0
+    return d
+
+
+def test_effects_lists_the_library(capsys):
+    code, out, _ = run(capsys, "effects", "--json")
+    lib = json.loads(out)
+    assert code == 0 and len(lib) == 11
+    lat = next(e for e in lib if e["name"] == "latency")
+    assert lat["params"][0]["unit"] == "s" and lat["params"][0]["bounds"] == [0.0, 0.1]
+
+
+def test_excite_writes_command_trajectories(tmp_path, capsys):
+    code, out, _ = run(capsys, "excite", "--out", tmp_path, "--n", 2, "--duration", 6)
+    assert code == 0
+    z = np.load(tmp_path / "excite_000.npz")
+    assert z["q_cmd"].shape == (91, 7) and float(z["control_hz"]) == 15.0
+    assert np.abs(np.diff(z["q_cmd"], axis=0)).max() <= 0.2 + 1e-9
+
+
+def test_synth_layout(data):
+    assert len(list((data / "train").glob("*.npz"))) == 3 and len(list((data / "heldout").glob("*.npz"))) == 2
+    info = json.loads((data / "synth.json").read_text())
+    assert info["truth"]["latency.delay"] == pytest.approx(0.02)
+
+
+def test_compare(data, capsys, tmp_path):
+    code, out, _ = run(capsys, "compare", data / "train", "--workers", 1, "--json", tmp_path / "c.json")
+    assert code == 0 and "RMSE" in out
+    c = json.loads((tmp_path / "c.json").read_text())
+    assert len(c["per_joint_rmse_rad"]) == 7 and c["noise_floor_rad"] > 0 and c["error_over_time"]
+
+
+@pytest.fixture(scope="module")
+def outdir(tmp_path_factory):
+    return tmp_path_factory.mktemp("cli_out")
+
+
+def test_diagnose_json_schema(data, capsys, outdir):
+    code, out, _ = run(capsys, "diagnose", data, "--workers", 1, "--json", outdir / "d.json")
+    assert code == 0
+    d = json.loads((outdir / "d.json").read_text())
+    assert set(d["baseline"]) >= {"heldout_rmse_rad", "noise_floor_rad"}
+    assert isinstance(d["missing_effect_found"], bool)
+    assert len(d["suspects"]) == 11
+    for s in d["suspects"]:
+        assert set(s) >= {"effect", "score", "heldout_rmse_after_rad", "params", "evidence"}
+        assert isinstance(s["score"], float) and isinstance(s["evidence"], str) and s["evidence"]
+    scores = [s["score"] for s in d["suspects"]]
+    assert scores == sorted(scores, reverse=True)
+    assert d["suspects"][0]["effect"] == "latency" and d["missing_effect_found"]
+
+
+def test_fit_json_schema_model_and_report(data, capsys, tmp_path, outdir):
+    model = tmp_path / "MODEL.yaml"
+    code, out, err = run(capsys, "fit", data, "--add", "latency", "--out", model, "--workers", 1,
+                         "--generations", 4, "--no-progress", "--json", tmp_path / "f.json")
+    assert code == 0, err
+    f = json.loads((tmp_path / "f.json").read_text())
+    assert f["effects"] == ["latency"] and set(f["params"]) == {"latency.delay"}
+    for k in ("before", "after"):
+        assert set(f[k]) >= {"train_rmse_rad", "heldout_rmse_rad", "per_joint_heldout_rmse_rad"}
+        assert len(f[k]["per_joint_heldout_rmse_rad"]) == 7
+    assert f["history"] and set(f["history"][0]) == {"generation", "best_loss", "median_loss"}
+    assert f["after"]["heldout_rmse_rad"] < 0.2 * f["before"]["heldout_rmse_rad"]
+    assert f["params"]["latency.delay"] == pytest.approx(0.02, rel=0.2)
+    from realm_ms.sysid import load_actuation_model
+
+    assert [s.name for s in load_actuation_model(model).stages] == ["latency"]
+    html = tmp_path / "r.html"
+    code, out, err = run(capsys, "report", data, "--model", model, "--out", html, "--workers", 1,
+                         "--fit", tmp_path / "f.json", "--diagnosis", outdir / "d.json")
+    assert code == 0, err
+    text = html.read_text()
+    for title in ("Overview", "Where the model fails", "Suspects", "Waterfall", "Fitted parameters", "Overlays",
+                  "Residual vs velocity", "Cross-correlation", "Hysteresis", "Fit history"):
+        assert title in text, title
+    assert text.count("data:image/png;base64,") >= 6 and "section failed" not in text
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["compare", "/nonexistent/data"], "does not exist"),
+    (["synth", "--hidden", "friction", "--out", "{tmp}/x"], "unknown effect"),
+    (["synth", "--hidden", "latency:delay=9", "--out", "{tmp}/x"], "outside its bounds"),
+    (["fit", "{tmp}/deg", "--add", "latency", "--out", "{tmp}/m.yaml"], "degrees"),
+    (["fit", "{data}", "--add", "warp_drive", "--out", "{tmp}/m.yaml"], "unknown effect"),
+    (["compare", "{data}/train", "--model", "{tmp}/missing.yaml"], "not found"),
+    (["report", "{data}", "--out", "{tmp}/r.html", "--diagnosis", "{data}/synth.json"], "not a `diagnose --json` output"),
+])
+def test_bad_input_is_a_clear_error(argv, msg, tmp_path, data, capsys):
+    t = np.arange(40) / 15.0
+    q = np.rad2deg(np.array([0, -0.6, 0, -2.4, 0, 1.9, 0]))[None].repeat(40, 0)
+    (tmp_path / "deg").mkdir()
+    for i in range(2):
+        np.savez(tmp_path / "deg" / f"d{i}.npz", t=t, q=q, q_cmd=q)
+    code, out, err = run(capsys, *[a.format(tmp=tmp_path, data=data) for a in argv])
+    assert code == 2 and msg in err and "Traceback" not in err

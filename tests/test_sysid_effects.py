@@ -1,0 +1,154 @@
+"""Effect library: names, parameter declarations, spec parsing, and each effect in the simulator."""
+
+import numpy as np
+import pytest
+import torch
+
+from realm_ms.sysid.effects import CONFOUNDS, EFFECTS, make_effect
+from realm_ms.sysid.spec import parse_effects
+
+NAMES = ["coulomb_friction", "viscous_damping", "stribeck_friction", "armature", "payload", "gravity_comp_error",
+         "latency", "gain_mismatch", "torque_limit", "backlash", "encoder_bias"]
+UNITS = {"N·m", "N·m·s/rad", "kg·m²", "kg", "s", "rad", "rad/s", "N·m/s", "1"}
+
+
+def test_registry_has_exactly_the_issue_names():
+    assert list(EFFECTS) == NAMES
+    for a, b in CONFOUNDS:
+        assert a in EFFECTS and b in EFFECTS
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_declared_parameters(name):
+    fx = make_effect(name)
+    assert fx.specs and fx.free_params
+    for s in fx.specs:
+        assert s.unit in UNITS, (name, s.name, s.unit)
+        assert s.lo < s.hi and s.lo <= s.nominal <= s.hi and s.lo <= s.off <= s.hi
+        assert s.scale in ("lin", "log") and s.doc
+    assert fx.is_off()
+    assert fx.summary and fx.signature
+
+
+def test_set_values_by_joint_and_errors():
+    fx = make_effect("coulomb_friction", {"fc": 0.2, "fc4": 0.5})
+    v = fx.values()
+    assert v["fc1"] == pytest.approx(0.2) and v["fc4"] == pytest.approx(0.5)
+    with pytest.raises(KeyError, match="no parameter"):
+        fx.set_values({"friction": 1})
+    with pytest.raises(ValueError, match="outside its bounds"):
+        fx.set_values({"fc": 99})
+
+
+def test_spec_parsing():
+    fx = parse_effects("coulomb_friction:fc=0.3,asymmetric=true,fc_asym2=0.1,latency:delay=0.01")
+    assert [f.name for f in fx] == ["coulomb_friction", "latency"]
+    assert fx[0].config.asymmetric is True
+    assert fx[0].values()["fc_asym2"] == pytest.approx(0.1)
+    assert "coulomb_friction.fc_asym1" in [p.key for p in fx[0].free_params]
+    assert fx[1].values()["delay"] == pytest.approx(0.01)
+    assert parse_effects("none") == []
+    nominal = parse_effects("armature", default_values="nominal")[0]
+    assert nominal.values()["ia3"] == pytest.approx(0.2)
+    with pytest.raises(ValueError, match="unknown effect"):
+        parse_effects("friction")
+
+
+# ---------------------------------------------------------------------------- in the simulator
+@pytest.fixture(scope="module")
+def sim():
+    from realm_ms.sysid.simulator import ReplaySimulator
+
+    return ReplaySimulator()
+
+
+@pytest.fixture(scope="module")
+def commands():
+    from realm_ms.sysid.excite import ExciteConfig, excite
+
+    cmds = excite(3, seed=1, config=ExciteConfig(duration_s=3.0))
+    steps = 360
+    k = np.minimum((np.arange(steps) / 120 * 15 + 1e-9).astype(int), cmds[0].shape[0] - 1)
+    cmd = np.stack([c[k] for c in cmds])
+    return cmd[:, 0].copy(), cmd
+
+
+def _roll(sim, commands, effects):
+    q0, cmd = commands
+    return sim.rollout(q0, np.zeros_like(q0), cmd, effects)
+
+
+@pytest.fixture(scope="module")
+def nominal(sim, commands):
+    return _roll(sim, commands, [])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_off_is_nominal_and_nominal_strength_changes_motion(sim, commands, nominal, name):
+    off = _roll(sim, commands, [make_effect(name)])
+    np.testing.assert_allclose(off, nominal, atol=1e-6)  # float32 PhysX
+    on = parse_effects(name, default_values="nominal")
+    moved = _roll(sim, commands, on)
+    assert np.all(np.isfinite(moved))
+    assert np.abs(moved - nominal).max() > 5e-4, f"{name} at its typical strength leaves no trace"
+    # build-time effects are reset between rollouts
+    np.testing.assert_allclose(_roll(sim, commands, []), nominal, atol=1e-6)
+
+
+def test_batched_rows_equal_single_runs(sim, commands):
+    """A batch where an effect is active on some envs only (screening) equals separate runs."""
+    q0, cmd = commands
+    fx = make_effect("coulomb_friction")
+    theta = np.zeros((3, len(fx.params)))
+    theta[1, :7] = 0.4
+    fx.set_theta(theta)
+    g = make_effect("gravity_comp_error")
+    gt = np.zeros((3, 1))
+    gt[2] = 0.2
+    g.set_theta(gt)
+    batched = sim.rollout(q0, np.zeros_like(q0), cmd, [fx, g])
+    single1 = sim.rollout(q0[1:2], np.zeros((1, 7)), cmd[1:2], [make_effect("coulomb_friction", {"fc": 0.4})])
+    single2 = sim.rollout(q0[2:3], np.zeros((1, 7)), cmd[2:3], [make_effect("gravity_comp_error", {"scale": 0.2})])
+    np.testing.assert_allclose(batched[1], single1[0], atol=1e-6)
+    np.testing.assert_allclose(batched[2], single2[0], atol=1e-6)
+
+
+def test_latency_is_continuous_below_one_physics_step(sim, commands, nominal):
+    a = _roll(sim, commands, [make_effect("latency", {"delay": 0.002})])
+    b = _roll(sim, commands, [make_effect("latency", {"delay": 0.004})])
+    da, db = np.abs(a - nominal).max(), np.abs(b - nominal).max()
+    assert 0 < da < db < 3 * da  # sub-step delays (dt = 8.3 ms) act, proportionally
+
+
+def test_payload_sags_and_gravity_comp_keeps_nominal_model(sim, commands, nominal):
+    q0, cmd = commands
+    hold = np.repeat(q0[:, None], cmd.shape[1], 1)
+    ref = sim.rollout(q0, np.zeros_like(q0), hold, [])
+    sag = sim.rollout(q0, np.zeros_like(q0), hold, [make_effect("payload", {"mass": 1.0})])
+    # at rest the payload pulls joints 2/4 away from the target; the nominal robot holds it
+    assert np.abs(ref[:, -1] - q0).max() < 1e-3
+    assert np.abs(sag[:, -1, [1, 3]] - q0[:, [1, 3]]).max() > 2e-3
+
+
+def test_benchmark_stage_interface():
+    """Effects are ActuationStages the lead's DroidArmDriver runs unchanged."""
+    from realm_ms.agents.actuation import ActuationModel
+    from realm_ms.agents.droid_controller import DroidArmDriver, DroidControlConfig
+    from realm_ms.sysid.simulator import ReplaySimulator
+
+    model = ReplaySimulator.__new__(ReplaySimulator)  # only for the ArmModel path
+    from realm_ms.agents.arm_model import ArmModel
+    from realm_ms.sysid.urdf import BASE_LINK, TIP_LINK, source_urdf_path
+
+    arm = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
+    stages = [make_effect(n) for n in NAMES]
+    for s in stages:
+        s.set_values({p.local_key: p.spec.nominal for p in s.free_params})
+    drv = DroidArmDriver(arm, DroidControlConfig(joint_physics="none"), 2, "cpu", ActuationModel(stages))
+    q = torch.tensor([[0.0, -0.6, 0.0, -2.4, 0.0, 1.9, 0.0]] * 2)
+    drv.reset(q)
+    drv.set_target(q + 0.1)
+    for _ in range(3):
+        tau = drv.torque(q, torch.zeros_like(q), 1 / 120)
+    assert tau.shape == (2, 7) and torch.isfinite(tau).all()
+    del model

@@ -1,0 +1,127 @@
+"""Proof on data with a hidden effect (issue 3): the hidden effect is ranked first (first two for a
+documented confound pair), fitting it brings the held-out RMSE to <= 1.5x the noise floor (and
+>= 5x down from the start for a strong effect), parameters come back within 20 %, and data with
+no hidden effect yields "no missing effect".
+
+``make test`` runs a fast subset (small data: 3 + 2 trajectories x 6 s); ``make test-slow`` the
+sweep over every effect x 3 seeds x {15 Hz, 100 Hz} logging, two-effect pairs and the null case at
+the bench size (7 + 3 trajectories x 10 s).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from realm_ms.sysid.data_io import load_split
+from realm_ms.sysid.diagnose import diagnose
+from realm_ms.sysid.effects import confounded_with
+from realm_ms.sysid.engine import Evaluator
+from realm_ms.sysid.fit import FitConfig, fit
+from realm_ms.sysid.spec import parse_effects
+from realm_ms.sysid.synth import SynthConfig, synth
+
+NOISE = 2e-4
+#: hidden effect -> spec at a realistic, clearly visible strength (sysid-notes.md §9 ranges)
+HIDDEN = {
+    "coulomb_friction": "coulomb_friction:fc=0.3",
+    "viscous_damping": "viscous_damping:b=0.5",
+    "stribeck_friction": "stribeck_friction:fs=0.5,fc_ratio=0.3,vs=0.08",
+    "armature": "armature:ia=0.2",
+    "payload": "payload:mass=0.5",
+    "gravity_comp_error": "gravity_comp_error:scale=0.1",
+    "latency": "latency:delay=0.02",
+    "gain_mismatch": "gain_mismatch:stiffness_error=0.2,damping_error=0.2",
+    "torque_limit": "torque_limit:rate_limit=300,effort_scale=1.0",
+    # backlash is only observable where the gravity load changes sign (joints 2, 4, 6 in the
+    # excitation workspace); joints 1, 3, 5, 7 carry ~no gravity torque
+    "backlash": "backlash:half_gap2=0.002,half_gap4=0.002,half_gap6=0.002",
+    "encoder_bias": "encoder_bias:bias=0.003,bias2=-0.002,bias5=0.004",
+}
+PAIRS = ["latency:delay=0.015,viscous_damping:b=0.5", "coulomb_friction:fc=0.3,gain_mismatch:stiffness_error=0.2"]
+
+
+@pytest.fixture(scope="module")
+def ev():
+    e = Evaluator(workers=1, device="cpu")
+    yield e
+    e.close()
+
+
+def run_case(tmp_path, ev, hidden: str, seed: int, rate: float, small: bool):
+    size = dict(n_train=3, n_heldout=2, duration_s=6.0) if small else dict(n_train=7, n_heldout=3, duration_s=10.0)
+    info = synth(hidden, tmp_path, SynthConfig(seed=seed, noise_rad=NOISE, rate_hz=rate, **size), evaluator=ev)
+    train, held = load_split(tmp_path)
+    d = diagnose(train, held, evaluator=ev, log=lambda *a: None)
+    return info, train, held, d
+
+
+def check_rank(d, names: list[str]):
+    ranked = [s.effect for s in d.suspects]
+    for name in names:
+        allowed = len(names) + (1 if any(c in ranked[: len(names) + 1] for c in confounded_with(name)) else 0)
+        assert name in ranked[:allowed], f"{name} ranked {ranked.index(name) + 1}: {ranked[:4]}"
+    assert d.missing_effect_found
+
+
+def check_fit(info, train, held, d, ev, names: list[str], strong: bool = True):
+    f = fit(train, held, config=FitConfig(add=",".join(names)), evaluator=ev, progress=False, log=lambda *a: None)
+    before, after = f.before["heldout_rmse_rad"], f.after["heldout_rmse_rad"]
+    floor = min(d.noise_floor, NOISE * 1.05)
+    assert after <= 1.5 * floor, f"held-out {after:.2e} rad vs floor {floor:.2e}"
+    if strong:
+        assert before >= 5 * after, f"only {before / after:.1f}x better"
+    truth = info["truth"]
+    fitted = {fx.name: fx for fx in f.model.effects}
+    for key, est in f.params.items():
+        eff, local = key.split(".")
+        p = next(p for p in fitted[eff].params if p.local_key == local)
+        true = truth.get(key, p.spec.off)
+        # parameters the hidden effect does not use (truth = off) may be unidentifiable (a saturation
+        # that never binds); their harmlessness is what the held-out RMSE criterion checks
+        if abs(true - p.spec.off) > 1e-9:
+            assert abs(est - true) <= 0.2 * abs(true - p.spec.off), f"{key}: {est:.4g} vs truth {true:.4g}"
+    return f
+
+
+# ---------------------------------------------------------------------------- fast (make test)
+@pytest.mark.parametrize("name, rate", [("latency", 15.0), ("coulomb_friction", 100.0)])
+def test_hidden_effect_fast(tmp_path, ev, name, rate):
+    info, train, held, d = run_case(tmp_path, ev, HIDDEN[name], seed=0, rate=rate, small=True)
+    check_rank(d, [name])
+    check_fit(info, train, held, d, ev, [name])
+
+
+def test_no_hidden_effect_fast(tmp_path, ev):
+    _, _, _, d = run_case(tmp_path, ev, "none", seed=0, rate=15.0, small=True)
+    assert not d.missing_effect_found, d.message
+    assert "no missing effect" in d.message
+
+
+# ---------------------------------------------------------------------------- slow sweep
+@pytest.mark.slow
+@pytest.mark.parametrize("rate", [15.0, 100.0])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("name", list(HIDDEN))
+def test_hidden_effect_sweep(tmp_path, ev, name, seed, rate):
+    info, train, held, d = run_case(tmp_path, ev, HIDDEN[name], seed=seed, rate=rate, small=False)
+    check_rank(d, [name])
+    check_fit(info, train, held, d, ev, [name])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("spec", PAIRS)
+def test_two_hidden_effects(tmp_path, ev, spec):
+    names = [fx.name for fx in parse_effects(spec)]
+    info, train, held, d = run_case(tmp_path, ev, spec, seed=0, rate=15.0, small=False)
+    check_rank(d, names[:1])  # the stronger one first ...
+    ranked = [s.effect for s in d.suspects]
+    assert all(n in ranked[:4] for n in names), ranked[:4]  # ... and both among the suspects
+    check_fit(info, train, held, d, ev, names)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("rate", [15.0, 100.0])
+def test_no_hidden_effect_sweep(tmp_path, ev, seed, rate):
+    _, _, _, d = run_case(tmp_path, ev, "none", seed=seed, rate=rate, small=False)
+    assert not d.missing_effect_found, d.message
