@@ -3,7 +3,7 @@ PY := .venv/bin/python
 export MS_SKIP_ASSET_DOWNLOAD_PROMPT := 1
 export PYTHONUNBUFFERED := 1
 
-.PHONY: setup demo test test-slow bench clean
+.PHONY: setup demo test test-slow bench bench-expert clean
 
 setup:
 	@bash scripts/setup.sh
@@ -19,6 +19,9 @@ test-slow: setup
 
 bench: setup
 	$(PY) bench/step_rate.py
+
+bench-expert: setup
+	$(PY) bench/expert_success.py
 
 clean:
 	rm -rf outputs .pytest_cache

@@ -87,10 +87,11 @@ def object_folder(out: Path, oid: str) -> Path:
 
 
 def build_object(item: SourceItem, out: Path, cfg: BuildConfig, content_hash: str) -> tuple[CatalogRecord, Decomposition]:
-    info = category_info(item.category)
+    # Procedural objects carry exact semantics, size and mass: the category table is for real meshes.
+    info = category_info(item.category) if item.procedural is None else None
     lo = load_item(item)
     rep = repair_scene(lo.scene) if item.procedural is None else None
-    if item.procedural is None:
+    if info is not None:
         norm = normalize(lo.scene, lo.hulls, item.id, info, item.known_scale)
         extents = norm.extents
     else:
@@ -108,14 +109,14 @@ def build_object(item: SourceItem, out: Path, cfg: BuildConfig, content_hash: st
     col_volume = float(sum(h.volume for h in dec.hulls))
     # Category densities are effective densities over the *filled* (collision) volume, the same
     # convention as the procedural generators, so hollow shells (bowls, lids) get plausible masses.
-    mass = lo.mass if lo.mass is not None else mass_for(col_volume if col_volume > 0 else solid_volume(mesh), info)
-    sem = lo.semantics or info.semantics
+    mass = lo.mass if lo.mass is not None else mass_for(col_volume if col_volume > 0 else solid_volume(mesh), info)  # type: ignore[arg-type]
+    sem = lo.semantics or info.semantics  # type: ignore[union-attr]
     colors = list(sem.colors) if lo.semantics else ([item.color] if item.color else dominant_colors(lo.scene))
     folder = object_folder(out, item.id)
     rec = CatalogRecord(
         id=item.id, source=item.source, licence=item.licence, category=item.category,
         visual=f"objects/{folder.name}/visual.glb", collision=f"objects/{folder.name}/collision.obj",
-        mass=float(mass), collision_volume=col_volume, extents=extents, friction=lo.friction or info.friction,
+        mass=float(mass), collision_volume=col_volume, extents=extents, friction=lo.friction or info.friction,  # type: ignore[union-attr]
         colors=colors, shapes=list(sem.shapes), material=sem.material, uses=list(sem.uses), fact=sem.fact, seen=sem.seen,
         theme=sem.theme, names=list(sem.names), size_class=size_class(max(extents)), n_hulls=len(dec.hulls),
         decomposition=dec.method, real_mesh=item.real_mesh, textured=lo.textured, lying=lo.lying,

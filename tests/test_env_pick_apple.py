@@ -34,12 +34,28 @@ def test_spaces_and_state_obs():
 
 
 @pytest.mark.parametrize("mode", ["pd_joint_pos", "pd_joint_delta_pos", "pd_ee_delta_pose"])
-def test_maniskill_control_modes_step(mode):
+def test_maniskill_control_modes_move_the_robot(mode):
     env = gym.make(ENV, obs_mode="state", control_mode=mode)
     env.reset(seed=0)
-    for _ in range(3):
-        obs, *_ = env.step(env.action_space.sample() * 0)
-    assert torch.isfinite(obs).all()
+    u = env.unwrapped
+    q0, p0 = u.agent.arm_qpos[0].clone(), u.agent.tcp_pose.p[0].clone()
+    a = torch.zeros(env.action_space.shape)
+    if mode == "pd_joint_pos":
+        a[:7] = q0 + 0.1
+    elif mode == "pd_joint_delta_pos":
+        a[0] = 0.5  # normalised: +0.05 rad per step on joint 1
+    else:
+        a[0] = 1.0  # normalised: +0.1 m along x per step (clipped by the PD tracking)
+    for _ in range(10):
+        env.step(a)
+    dq = u.agent.arm_qpos[0] - q0
+    if mode == "pd_joint_pos":
+        assert (dq - 0.1).abs().max() < 0.02, dq
+    elif mode == "pd_joint_delta_pos":
+        assert dq[0] > 0.2 and dq[1:].abs().max() < 0.05, dq
+    else:
+        dp = u.agent.tcp_pose.p[0] - p0
+        assert dp[0] > 0.05 and dp[1:].abs().max() < 0.5 * dp[0], dp
     env.close()
 
 

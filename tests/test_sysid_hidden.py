@@ -31,7 +31,7 @@ HIDDEN = {
     "gravity_comp_error": "gravity_comp_error:scale=0.1",
     "latency": "latency:delay=0.02",
     "gain_mismatch": "gain_mismatch:stiffness_error=0.2,damping_error=0.2",
-    "torque_limit": "torque_limit:rate_limit=300,effort_scale=1.0",
+    "torque_limit": "torque_limit:rate_limit=1000,effort_scale=1.0",  # libfranka's limit
     # backlash is only observable where the gravity load changes sign (joints 2, 4, 6 in the
     # excitation workspace); joints 1, 3, 5, 7 carry ~no gravity torque
     "backlash": "backlash:half_gap2=0.002,half_gap4=0.002,half_gap6=0.002",

@@ -149,7 +149,8 @@ def _fit(args) -> int:
     with _user_input():
         f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
-                    generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint)
+                    generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
+                    refit=not args.no_refit)
     names = [f"J{i}" for i in range(1, 8)]
     print(f"fitted {', '.join(f['effects'])} -> {args.out}")
     for k, v in f["params"].items():
@@ -229,6 +230,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--generations", type=int, default=30)
     s.add_argument("--popsize", type=int, default=None)
     s.add_argument("--checkpoint", help="resumable optimiser state (pickle) written every generation")
+    s.add_argument("--no-refit", action="store_true", help="keep the --model's own parameters fixed (default: refit them jointly)")
     s.add_argument("--no-progress", action="store_true")
     s.add_argument("--json")
     s.set_defaults(func=_fit)

@@ -39,6 +39,7 @@ class DiagnoseConfig:
     min_improvement: float = 0.10  # relative held-out RMSE reduction to call an effect missing
     floor_factor: float = 1.15  # baseline RMSE within this factor of the noise floor: nothing missing
     confound_margin: float = 0.35  # relative difference of remaining held-out error within which a pair is confounded
+    retune_model: bool = True  # re-fit the given model's parameters together with each candidate
 
 
 @dataclass
@@ -50,12 +51,13 @@ class Suspect:
     params: dict[str, float]
     evidence: str
     confounded_with: list[str] = field(default_factory=list)
+    retuned_model_params: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return {"effect": self.effect, "score": round(float(self.score), 6),
                 "heldout_rmse_after_rad": float(self.heldout_rmse_after_rad), "params": self.params,
                 "evidence": self.evidence, "train_rmse_after_rad": float(self.train_rmse_after_rad),
-                "confounded_with": self.confounded_with}
+                "confounded_with": self.confounded_with, "retuned_model_params": self.retuned_model_params}
 
 
 @dataclass
@@ -103,6 +105,15 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     tr_ss = SegmentSet.build(train, model.physics_hz, cfg.segment_s, cfg.burn_in_s)
     he_ss = SegmentSet.build(heldout, model.physics_hz, cfg.segment_s, cfg.burn_in_s)
     base = [fx for fx in model.actuation().stages]
+    # with a model that already has effects, each candidate is screened *together with* the model's
+    # own parameters (a first effect fitted alone absorbs part of a second one; re-tuning it
+    # while adding the next is what `fit --refit` does too)
+    retune = bool(cfg.retune_model and base)
+
+    def copies() -> list:
+        return [make_effect(fx.name, fx.values(), _config(fx)) for fx in base] if retune else []
+
+    fixed = [] if retune else base
     present = set(model.names)
     names = [n for n in cfg.candidates if n not in present]
     for n in names:
@@ -111,8 +122,8 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
 
     # 1. baseline
     log(f"baseline: {tr_ss.n} train / {he_ss.n} held-out segments")
-    empty = Group.of([])
-    (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], base, [empty], [np.zeros((1, 0))])
+    empty = Group.of(copies())
+    (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], fixed, [empty], [empty.u[None]])
     base_tr_rmse, base_he_rmse = float(np.sqrt(b_tr[0][0])), float(np.sqrt(b_he[0][0]))
     res_he = np.where(he_ss.mask[..., None], he_ss.meas - b_he[2][0], np.nan)
     floor, floor_j = noise_floor(he_ss, res_he)
@@ -120,9 +131,9 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     log(f"baseline held-out RMSE {base_he_rmse:.3e} rad")
 
     # 2. screening: block-diagonal secant sensitivities, one LM step per effect, scored on held-out
-    groups = [Group.of([make_effect(n)]) for n in names]
+    groups = [Group.of([make_effect(n)] + copies()) for n in names]
     log(f"screening {len(groups)} effects ({sum(len(g.params) for g in groups)} parameters)")
-    steps = linearized_step(ev, tr_ss, base, groups, first=True, block=True, also=[he_ss])
+    steps = linearized_step(ev, tr_ss, fixed, groups, first=True, block=True, also=[he_ss])
     tr_mse = np.array([st["mse_after"] for st in steps])
     he_mse = np.array([st["scores"][1][0][0] if st["improved"] else b_he[0][0] for st in steps])
     order = np.argsort(he_mse)
@@ -130,7 +141,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     if refine:
         log(f"refining {', '.join(names[i] for i in refine)}")
         sub = [groups[i] for i in refine]
-        steps2 = linearized_step(ev, tr_ss, base, sub, first=False, also=[he_ss])
+        steps2 = linearized_step(ev, tr_ss, fixed, sub, first=False, also=[he_ss])
         for i, st in zip(refine, steps2):
             if st["improved"]:
                 tr_mse[i], he_mse[i] = st["mse_after"], st["scores"][1][0][0]
@@ -141,7 +152,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     best_i = int(np.argmin(he_rmse)) if len(he_rmse) else None
     if best_i is not None and he_rmse[best_i] < base_he_rmse:
         g_best = groups[best_i]
-        (hb,) = evaluate_groups(ev, [he_ss], base, [g_best], [g_best.u[None]])
+        (hb,) = evaluate_groups(ev, [he_ss], fixed, [g_best], [g_best.u[None]])
         res_b = np.where(he_ss.mask[..., None], he_ss.meas - hb[0][2][0], np.nan)
         f2, f2_j = noise_floor(he_ss, res_b)
         if f2 < floor:
@@ -152,12 +163,16 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     for i, (n, g) in enumerate(zip(names, groups)):
         fx = g.effects[0]
         vals = fx.values()
+        retuned = {f"{b.name}.{k}": round(v, 9) for b in g.effects[1:] for k, v in b.values().items()
+                   if k in {p.local_key for p in b.free_params}}
         after_he = float(he_rmse[i])
         after_tr = float(np.sqrt(tr_mse[i]))
         sc = (base_he_rmse - after_he) / base_he_rmse if base_he_rmse > 0 else 0.0
         free = {p.local_key for p in fx.free_params}
-        suspects.append(Suspect(n, sc, after_he, after_tr, {k: round(v, 9) for k, v in vals.items() if k in free},
-                                fx.evidence(vals, feats)))
+        sus = Suspect(n, sc, after_he, after_tr, {k: round(v, 9) for k, v in vals.items() if k in free},
+                      fx.evidence(vals, feats))
+        sus.retuned_model_params = retuned
+        suspects.append(sus)
     suspects.sort(key=lambda s: -s.score)
 
     # 4. confounds
@@ -187,6 +202,12 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
                f"(noise floor {floor:.2e} rad)")
     log(msg)
     return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), found, suspects, feats, msg)
+
+
+def _config(fx) -> dict:
+    from dataclasses import asdict
+
+    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
 
 
 def _arm_model():

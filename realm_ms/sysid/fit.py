@@ -33,7 +33,7 @@ class FitConfig:
     gn_iterations: int = 2
     segment_s: float = 8.0
     burn_in_s: float = 1.0
-    refit: bool = False  # also refit the parameters of effects already in the model
+    refit: bool = True  # also refit the parameters of effects already in the model (jointly)
     checkpoint: str | None = None
 
 
@@ -74,9 +74,9 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     added = parse_effects(cfg.add)
     clash = [fx.name for fx in added if fx.name in model.names]
     if clash:
-        raise ValueError(f"{', '.join(clash)} already in the model; drop it from --add or use --refit")
+        raise ValueError(f"{', '.join(clash)} already in the model (its parameters are refitted anyway); drop it from --add")
     fitted = added + ([fx for fx in model.effects] if cfg.refit else [])
-    if not fitted:
+    if not added:
         raise ValueError("nothing to fit: give effects with --add (see `realm sysid effects`)")
     fixed = [fx for fx in model.effects if fx not in fitted]
     ev = evaluator or Evaluator.auto(SimConfig.from_model(model))
@@ -95,7 +95,7 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     for it in range(cfg.gn_iterations):
         # first iteration as the diagnosis screens (block probes from the off-values: robust for
         # stick-slip effects), then full-Jacobian iterations
-        r = linearized_step(ev, tr_ss, base_fixed, [group], first=(it == 0 and not cfg.refit), block=(it == 0))[0]
+        r = linearized_step(ev, tr_ss, base_fixed, [group], first=(it == 0), block=(it == 0))[0]
         gn_hist.append({"iteration": it + 1, "train_rmse_rad": float(np.sqrt(r["mse_after"]))})
         log(f"linearised start {it + 1}: train RMSE {np.sqrt(r['mse_before']):.3e} -> {np.sqrt(r['mse_after']):.3e} rad")
 
