@@ -180,26 +180,25 @@ class ArmModel:
         self.inertias = t(np.stack([i.inertia for i in n["inertials"]]))  # (n,3,3) body frame, about CoM
         self.tip_offset = t(n["tip_offset"])
         self.gravity = t(GRAVITY)
-        # Rodrigues pieces for rotation about each (unit) joint axis
+        # Rodrigues pieces for rotation about each (unit) joint axis, folded into the joint origins:
+        # local_i(q) = O_i Rot(a_i, q) = O_i + sin(q) O_i K_i + (1 - cos q) O_i K_i^2 (4x4, no translation part)
         a = self.axes
-        k = torch.zeros(self.dof, 3, 3, device=device, dtype=dtype)
+        k = torch.zeros(self.dof, 4, 4, device=device, dtype=dtype)
         k[:, 0, 1], k[:, 0, 2], k[:, 1, 0] = -a[:, 2], a[:, 1], a[:, 2]
         k[:, 1, 2], k[:, 2, 0], k[:, 2, 1] = -a[:, 0], -a[:, 1], a[:, 0]
-        self._K, self._K2 = k, k @ k
+        self._OK, self._OK2 = self.origins @ k, self.origins @ (k @ k)
+        self._com_h = torch.cat([self.coms, torch.ones(self.dof, 1, device=device, dtype=dtype)], 1)[..., None]
         return self
 
     # ------------------------------------------------------------------ kinematics
     def link_frames(self, q: torch.Tensor) -> torch.Tensor:
         """World (base) transforms of the n moving bodies, shape (B, n, 4, 4)."""
         s, c = torch.sin(q)[..., None, None], torch.cos(q)[..., None, None]
-        rot = torch.eye(3, device=q.device, dtype=q.dtype) + s * self._K + (1 - c) * self._K2  # (B,n,3,3)
-        local = self.origins.expand(q.shape[0], -1, -1, -1).clone()
-        local[..., :3, :3] = local[..., :3, :3] @ rot
-        frames = []
-        t = local[:, 0]
-        frames.append(t)
-        for i in range(1, self.dof):
-            t = t @ local[:, i]
+        local = (self.origins + s * self._OK + (1 - c) * self._OK2).unbind(1)
+        t = local[0]
+        frames = [t]
+        for m in local[1:]:
+            t = t @ m
             frames.append(t)
         return torch.stack(frames, dim=1)
 
@@ -243,13 +242,13 @@ class ArmModel:
         trans = cross(dw_prev, d, dim=-1) + cross(w_prev_body, cross(w_prev_body, d, dim=-1), dim=-1)
         a0 = (-self.gravity if gravity else torch.zeros_like(self.gravity)).expand(q.shape[0], 1, 3)
         a = torch.cumsum(torch.cat([a0, trans], dim=1), dim=1)
-        r = (rot @ self.coms[..., None])[..., 0]  # CoM offset in world axes
+        c = (frames @ self._com_h)[..., :3, 0]  # CoM positions
+        r = c - p  # CoM offset in world axes
         ac = a + cross(dw, r, dim=-1) + cross(w, cross(w, r, dim=-1), dim=-1)
         f = self.masses[:, None] * ac  # (B,n,3)
         inertia_w = rot @ self.inertias @ rot.transpose(-1, -2)
-        iw = (inertia_w @ w[..., None])[..., 0]
-        nn = (inertia_w @ dw[..., None])[..., 0] + cross(w, iw, dim=-1)
-        c = p + r
+        iw, idw = (inertia_w @ torch.stack([w, dw], dim=-1)).unbind(-1)
+        nn = idw + cross(w, iw, dim=-1)
         # suffix sums: force/moment of all bodies beyond joint i, moments about p_i
         rev = lambda x: torch.flip(torch.cumsum(torch.flip(x, [1]), 1), [1])  # noqa: E731
         f_sum = rev(f)

@@ -161,6 +161,8 @@ class DroidArmDriver:
         self.joint_physics = resolve(config.joint_physics, JOINT_PHYSICS_PRESETS, "joint physics")
         t = lambda v: torch.as_tensor(v, device=self.device, dtype=torch.float32)  # noqa: E731
         self.friction = t(self.joint_physics.friction)
+        self._neg_friction = -self.friction
+        self._neg_effort_limits = -self.effort_limits
         self.armature = t(self.joint_physics.armature)
         # lower bound of each joint's effective inertia, for the friction limiter
         ref = t(config.reference_qpos)[None]
@@ -225,26 +227,27 @@ class DroidArmDriver:
 
     def torque(self, q: torch.Tensor, qd: torch.Tensor, dt: float) -> torch.Tensor:
         """Explicit joint torque to apply this physics step (the implicit drive adds the rest)."""
-        state = ControlState(q=q, qd=qd, q_target=self.q_target, dt=dt, model=self.model, time=self.time)
         act = self.actuation
-        q_m, qd_m = act.measure(q, qd, state) if act else (q, qd)
-        q_t = act.command(self.q_target, state) if act else self.q_target
-        state.q_target = q_t
+        if act:
+            state = ControlState(q=q, qd=qd, q_target=self.q_target, dt=dt, model=self.model, time=self.time)
+            q_m, qd_m = act.measure(q, qd, state)
+            q_t = state.q_target = act.command(self.q_target, state)
+        else:  # nominal robot: skip the stage plumbing (this runs 8x per action)
+            q_m, qd_m, q_t = q, qd, self.q_target
         if self.config.model_rate == "physics" or self._terms is None:
-            gains = act.gains(self.gains) if act else self.gains
-            kp, kd, bias = self._law_terms(q_m, qd_m, gains)
+            kp, kd, bias = self._law_terms(q_m, qd_m, act.gains(self.gains) if act else self.gains)
             if self.config.model_rate == "control":
                 self._terms = (kp, kd, bias, q_m.clone(), self._gravity_jacobian(q_m))
         if self.config.model_rate == "control":
             kp, kd, bias, q_ref, dg = self._terms
             bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]  # first-order gravity between refreshes
         tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
-        tau = torch.clamp(tau, -self.effort_limits, self.effort_limits)
+        tau = torch.clamp(tau, self._neg_effort_limits, self.effort_limits)
         if act:
             tau = act.actuator(tau, state)
         self.motor_torque = tau
         # joint friction is physics, not command: it acts on the true velocity
-        friction = -self.friction * torch.tanh(qd / self.joint_physics.friction_velocity)
+        friction = self._neg_friction * torch.tanh(qd / self.joint_physics.friction_velocity)
         tau = tau + limit_dissipative(friction, qd, self.inertia_lower_bound, dt)
         if act:
             plant = act.plant_torque(state)
@@ -294,7 +297,7 @@ class DroidJointImpedanceController(BaseController):
         self.actuation = ActuationModel()
         self.driver = DroidArmDriver(config.model_factory(), config.control, scene.num_envs, self.device, self.actuation)
         self._idx = self.active_joint_indices
-        self._zero_qf = None
+        self._qf_cpu = None  # reusable qf buffer (CPU backend)
 
     def _initialize_action_space(self):
         limits = self.articulation.get_qlimits()[0, self.active_joint_indices].cpu().numpy()
@@ -332,13 +335,15 @@ class DroidJointImpedanceController(BaseController):
             tau = self.driver.torque(self.qpos, self.qvel, self._dt)
             px.cuda_articulation_qf.torch()[self.articulation._data_index[:, None], self._idx[None]] = tau
             px.gpu_apply_articulation_qf()
-        else:
+        else:  # physx_cpu: one articulation; numpy in/out, the same torch law
             obj = self.articulation._objs[0]
-            q, qd = torch.from_numpy(obj.qpos[None]), torch.from_numpy(obj.qvel[None])
-            tau = self.driver.torque(q[:, self._idx], qd[:, self._idx], self._dt)
-            qf = np.zeros(obj.dof, dtype=np.float32)
-            qf[self._idx.cpu().numpy()] = tau[0].numpy()
-            obj.qf = qf
+            if self._qf_cpu is None:
+                self._idx_np = self._idx.cpu().numpy()
+                self._qf_cpu = np.zeros(obj.dof, dtype=np.float32)
+            idx = self._idx_np
+            q, qd = torch.from_numpy(obj.qpos[idx][None]), torch.from_numpy(obj.qvel[idx][None])
+            self._qf_cpu[idx] = self.driver.torque(q, qd, self._dt)[0].numpy()
+            obj.qf = self._qf_cpu
 
     def get_state(self) -> dict:
         return {"target_qpos": self.driver.q_target}

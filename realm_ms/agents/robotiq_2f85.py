@@ -284,6 +284,8 @@ class RobotiqGripperController(PDJointPosMimicController):
         if self.config.max_speed is None:
             return super().before_simulation_step()
         self._step += 1
+        if torch.equal(self._target_qpos, self._goal_qpos):
+            return  # idle gripper: the drive already holds this target
         dt = float(self.articulation.px.timestep)
         max_dq = self.config.max_speed * dt
         delta = torch.clamp(self._goal_qpos - self._target_qpos, -max_dq, max_dq)

@@ -33,11 +33,15 @@ def _model(model):
     return RobotModel.load(model)
 
 
-def _evaluator(model, workers=None, device=None):
+def _evaluator(model, workers=None, device=None, progress: bool = True):
+    import sys
+
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.simulator import SimConfig
 
-    return Evaluator.auto(SimConfig.from_model(model), workers, device)
+    ev = Evaluator.auto(SimConfig.from_model(model), workers, device)
+    ev.progress = progress and sys.stderr.isatty()
+    return ev
 
 
 def effects() -> list[dict[str, Any]]:

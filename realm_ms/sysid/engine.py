@@ -63,6 +63,7 @@ class Evaluator:
         self.max_envs = max_envs
         self._sim = None
         self._pool = None
+        self.progress = False  # progress bars for large in-process rollouts
 
     @classmethod
     def auto(cls, config: SimConfig | None = None, workers: int | None = None, device: str | None = None) -> "Evaluator":
@@ -85,6 +86,7 @@ class Evaluator:
             from realm_ms.sysid.simulator import make_simulator
 
             self._sim = make_simulator(self.config, self.device)
+            self._sim.show_progress = self.progress
         return self._sim
 
     def _pool_get(self):

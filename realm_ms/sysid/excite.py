@@ -98,8 +98,9 @@ def excite(n: int, seed: int = 0, config: ExciteConfig | None = None, q_limits: 
 
 
 def write_excitation(out_dir, n: int = 10, seed: int = 0, config: ExciteConfig | None = None) -> list:
-    """Write ``excite_XXX.npz`` files with ``t``, ``q_cmd`` and ``control_hz`` (and ``q`` = ``q_cmd``
-    as a placeholder, replaced by the measurement when the robot runs them)."""
+    """Write ``excite_XXX.npz`` files with ``t``, ``q_cmd`` and ``control_hz``: commands only. Run
+    them on the robot (stream ``q_cmd[i]`` at ``t[i]``), log the measured ``q`` at the same or a
+    higher rate, and save the result in the npz data format (``docs/sysid.md``)."""
     from pathlib import Path
 
     cfg = config or ExciteConfig()

@@ -85,6 +85,7 @@ class ReplaySimulator:
         self._targets: list[BuildTarget] = []
         self._dirty: set[int] = set()
         self.profile = StepProfile()
+        self.show_progress = False  # tqdm over physics steps for large rollouts (CLI sets it)
         torch.set_num_threads(1)
 
     # ------------------------------------------------------------------ arm pool
@@ -149,8 +150,15 @@ class ReplaySimulator:
         prof.build_s += time.perf_counter() - t0
         qbuf = q0.astype(np.float32).copy()
         vbuf = qd0.astype(np.float32).copy()
+        bar = None
+        if self.show_progress and e_count * steps > 150_000:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=steps, desc=f"simulating {e_count} arms", unit="step", leave=False)
         with torch.inference_mode():
             for k in range(steps):
+                if bar is not None and k % 40 == 0:
+                    bar.update(min(40, steps - k))
                 b = time.perf_counter()
                 driver.set_target(cmd_t[:, k])
                 tau = driver.torque(torch.from_numpy(qbuf), torch.from_numpy(vbuf), self.dt).numpy()
@@ -167,6 +175,8 @@ class ReplaySimulator:
                 prof.io_s += (d - c) + (time.perf_counter() - e)
                 prof.torch_s += c - b
                 prof.physx_s += e - d
+        if bar is not None:
+            bar.close()
         prof.arm_steps += e_count * steps
         if not np.all(np.isfinite(out)):
             bad = np.where(~np.isfinite(out).all(axis=(1, 2)))[0]
