@@ -193,3 +193,37 @@ def test_demo_writes_video_and_summary(tmp_path):
     assert steps["REACH"] <= steps["GRASP"] <= steps["LIFT_LARGE"]
     assert (tmp_path / f"{ENV}.mp4").stat().st_size > 10_000
     assert ENV in (tmp_path / "summary.md").read_text()
+
+
+def test_robot_model_payload_sags_as_the_impedance_law_predicts(tmp_path):
+    """A MODEL.yaml with an unmodelled 1 kg payload loads into the env (effects + the presets it was
+    fitted on) and makes the arm sag by K_p^-1 J^T m g: the identified model is the model that runs."""
+    import yaml
+
+    offset = [0.0, 0.0, 0.15]
+    model = {"gains": "polymetis", "joint_physics": "none", "physics_hz": 120,
+             "effects": [{"name": "payload", "params": {"mass": 1.0}, "config": {"offset": offset}}]}
+    path = tmp_path / "MODEL.yaml"
+    path.write_text(yaml.safe_dump(model))
+    env = gym.make(ENV, obs_mode="state", robot_model=str(path))
+    env.reset(seed=0)
+    u = env.unwrapped
+    drv = u.agent.arm_controller.driver
+    assert drv.joint_physics.friction == (0.0,) * 7  # the preset the model was fitted on
+    q0 = u.agent.arm_qpos[0].clone()
+    for _ in range(45):
+        env.step(torch.cat([q0, torch.zeros(1)]))
+    sag = u.agent.arm_qpos[0] - q0
+    m = drv.model
+    q = q0[None]
+    flange = m.fk(q)[0]
+    r = flange[:3, :3] @ torch.tensor(offset)
+    jac = m.jacobian(q)[0]
+    j_point = jac[:3] - torch.linalg.cross(r.expand(7, 3), jac[3:].T, dim=-1).T
+    tau = j_point.T @ torch.tensor([0.0, 0.0, -9.81])
+    g = drv.gains
+    kp = torch.diag(g.kq[0]) + jac.T @ torch.diag(g.kx[0]) @ jac
+    predicted = torch.linalg.solve(kp, tau)
+    assert predicted.abs().max() > 5e-3  # a visible effect
+    torch.testing.assert_close(sag, predicted, atol=0.2 * predicted.abs().max().item(), rtol=0)
+    env.close()

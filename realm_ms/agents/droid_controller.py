@@ -66,7 +66,7 @@ class JointPhysics:
 
     REALM's friction numbers were PhysX joint-friction coefficients. In SAPIEN's PhysX that
     coefficient is unitless and load-proportional; applied literally it locks the wrist (a 0.3 rad
-    step leaves 0.28 rad of error on joint 5, see docs/robot.md). Read as N.m they match the
+    step leaves 0.28 rad of error on joint 5; README, "The DROID controller"). Read as N.m they match the
     Franka's measured Coulomb friction (0.1-0.7 N.m, Gaz et al. 2019), which is how we apply them.
     """
 

@@ -50,7 +50,7 @@ class RealmEnv(BaseEnv):
         shader: str = "default",
         settle_steps: int = 5,
         success_tail: int = 15,
-        robot_model: Any = None,
+        robot_model: Any = None,  # MODEL.yaml path, dict or RobotModel from `realm sysid fit`
         droid_control: dict | DroidControlConfig | None = None,
         thresholds: Thresholds = Thresholds(),
         **kwargs,
@@ -60,9 +60,17 @@ class RealmEnv(BaseEnv):
         self.shader = shader
         self.settle_steps = int(settle_steps)
         self.success_tail = int(success_tail)
-        self.robot_model = robot_model
         self.thresholds = thresholds
         self.instruction = self.task_spec.instruction
+        self.robot_model = None
+        if robot_model is not None:  # an identified model: its effects and the presets it was fitted on
+            from realm_ms.sysid.robot_model import load_robot_model
+
+            self.robot_model = load_robot_model(robot_model)
+            if not isinstance(droid_control, DroidControlConfig):
+                droid_control = dict(gains=self.robot_model.gains, joint_physics=self.robot_model.joint_physics) | (droid_control or {})
+            if "sim_config" not in kwargs and int(self.robot_model.physics_hz) != 120:
+                kwargs["sim_config"] = dict(sim_freq=int(self.robot_model.physics_hz))
         if droid_control is not None:  # e.g. dict(gains="realm", model_rate="control")
             if robot_uids != PandaDroid.uid:
                 raise ValueError("droid_control configures the panda_droid agent only")
@@ -106,7 +114,7 @@ class RealmEnv(BaseEnv):
         super()._load_agent(options, sapien.Pose(p=[0, 0, self.scene_def.table_top_z]))
         self.agent.wrist_camera = (*self.camera_size, self.shader)
         if self.robot_model is not None:
-            self.agent.set_robot_model(self.robot_model)
+            self.agent.set_robot_model(self.robot_model.actuation())
 
     def _load_scene(self, options: dict):
         from realm_ms.tasks.objects import build_task_object

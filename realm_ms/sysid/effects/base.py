@@ -183,7 +183,13 @@ class BuildTarget:
         idx = list(range(NUM_JOINTS)) if joint_indices is None else [int(i) for i in joint_indices]
         self.joints = [joints[i] for i in idx]
         self.nominal_armature = [float(np.asarray(j.get_armature()).reshape(-1)[0]) for j in self.joints]
-        links = {l.get_name(): l for l in articulation.get_links()}
+        # ManiSkill prefixes link names per sub-scene ("scene-0-panda_droid_panda_link8"): key by suffix
+        links = {}
+        for l in articulation.get_links():
+            name = l.get_name()
+            for base in ("panda_link8", "panda_link7"):
+                if name == base or name.endswith("_" + base):
+                    links[base] = l
         if "panda_link8" in links:
             self.flange, self.flange_offset = links["panda_link8"], np.zeros(3)
         else:  # locked replay URDF: the flange is lumped into link 7
