@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from realm_ms.sysid.effects import make_effect
 from realm_ms.sysid.optimize import Group, cma_fit, evaluate_groups, linearized_step
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.robot_model import RobotModel
@@ -34,6 +35,7 @@ class FitConfig:
     segment_s: float = 8.0
     burn_in_s: float = 1.0
     refit: bool = True  # also refit the parameters of effects already in the model (jointly)
+    multistart: bool = True  # linearised start from the given values and from typical strengths
     checkpoint: str | None = None
 
 
@@ -91,13 +93,30 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     log(f"before: train RMSE {before['train_rmse_rad']:.3e} rad, held-out {before['heldout_rmse_rad']:.3e} rad")
 
     group = Group.of(fitted)
+    # multi-start linearised fit: from the given values (off unless set on the command line) and
+    # from the parameters' typical strengths, both in one batch; the better one seeds CMA-ES.
+    # Stick-slip effects (stiction) have local minima that one start can fall into.
+    starts = [group]
+    if cfg.multistart:
+        alt = Group.of([make_effect(fx.name, fx.values(), _config(fx)) for fx in fitted])
+        u_nom = alt.params.to_unit(alt.params.nominal())
+        added_keys = {p.key for fx in added for p in fx.free_params}
+        u_alt = np.array([u_nom[i] if p.key in added_keys else alt.u[i] for i, p in enumerate(alt.params)])
+        alt.apply(u_alt)
+        starts.append(alt)
     gn_hist = []
+    mse = [np.inf] * len(starts)
     for it in range(cfg.gn_iterations):
-        # first iteration as the diagnosis screens (block probes from the off-values: robust for
-        # stick-slip effects), then full-Jacobian iterations
-        r = linearized_step(ev, tr_ss, base_fixed, [group], first=(it == 0), block=(it == 0))[0]
-        gn_hist.append({"iteration": it + 1, "train_rmse_rad": float(np.sqrt(r["mse_after"]))})
-        log(f"linearised start {it + 1}: train RMSE {np.sqrt(r['mse_before']):.3e} -> {np.sqrt(r['mse_after']):.3e} rad")
+        # first iteration as the diagnosis screens (block probes: robust for stick-slip effects),
+        # then full-Jacobian iterations
+        rs = linearized_step(ev, tr_ss, base_fixed, starts, first=(it == 0), block=(it == 0))
+        mse = [r["mse_after"] for r in rs]
+        best = int(np.argmin(mse))
+        gn_hist.append({"iteration": it + 1, "train_rmse_rad": float(np.sqrt(mse[best]))})
+        log(f"linearised start {it + 1}: train RMSE {np.sqrt(rs[0]['mse_before']):.3e} -> "
+            + ", ".join(f"{np.sqrt(m):.3e}" for m in mse) + " rad" + (" (starts: given, typical)" if len(starts) > 1 else ""))
+    if starts[int(np.argmin(mse))] is not group:
+        group.apply(starts[int(np.argmin(mse))].u)
 
     def loss(us: np.ndarray) -> np.ndarray:
         (res,) = evaluate_groups(ev, [tr_ss], base_fixed, [group], [us])
@@ -120,6 +139,12 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     units = {p.key: p.unit for p in group.params}
     bounds = {p.key: [p.spec.lo, p.spec.hi] for p in group.params}
     return FitResult(out_model, [fx.name for fx in fitted], params, before, after, res.history, gn_hist, units, bounds)
+
+
+def _config(fx) -> dict:
+    from dataclasses import asdict
+
+    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
 
 
 def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: float = 8.0, burn_in_s: float = 1.0,

@@ -59,7 +59,10 @@ def parse_effects(text: str, default_values: Literal["off", "nominal"] = "off") 
         values = {k: _value(v) for k, v in kv.items() if k not in cfg_names}
         fx = make_effect(name, None, config)
         if default_values == "nominal":
-            fx.set_values({p.local_key: p.spec.nominal for p in fx.free_params})
+            # unspecified parameters at their typical strength -- except the other joints of a
+            # per-joint parameter given joint by joint (``half_gap2=...``): those stay off
+            by_joint = {p.spec.name for p in fx.params if p.joint is not None and p.local_key in values}
+            fx.set_values({p.local_key: p.spec.nominal for p in fx.free_params if p.spec.name not in by_joint})
         try:
             fx.set_values(values)
         except (KeyError, ValueError) as e:

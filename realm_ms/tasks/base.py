@@ -148,6 +148,7 @@ class RealmEnv(BaseEnv):
                 regions=[o.region or spec.spawn_region for o in movable],
                 yaw_ranges=[o.yaw for o in movable],
                 min_separation=spec.min_separation,
+                obstacles=[(o.pose[0], o.pose[1], self.objects[o.name].footprint_radius) for o in spec.by_role("fixture")],
             )
             for k, o in enumerate(movable):
                 obj = self.objects[o.name]

@@ -22,8 +22,10 @@ def sample_placements(
     regions: list[tuple[float, float, float, float]],
     yaw_ranges: list[tuple[float, float]],
     min_separation: float = 0.05,
+    obstacles: list[tuple[float, float, float]] = (),
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Returns xy (B, K, 2) and yaw (B, K). Objects are placed largest first."""
+    """Returns xy (B, K, 2) and yaw (B, K). Objects are placed largest first, clear of each other
+    and of ``obstacles`` (x, y, radius): fixtures that stay where they are."""
     b, k = len(rngs), len(radii)
     xy = np.zeros((b, k, 2))
     yaw = np.zeros((b, k))
@@ -31,7 +33,7 @@ def sample_placements(
     for e, rng in enumerate(rngs):
         for restart in range(MAX_RESTARTS + 1):
             # greedy placement can corner itself (a large object in the middle); start the layout over
-            if _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, last=restart == MAX_RESTARTS):
+            if _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, obstacles, last=restart == MAX_RESTARTS):
                 break
     return xy, yaw
 
@@ -39,8 +41,9 @@ def sample_placements(
 MAX_RESTARTS = 20
 
 
-def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, last: bool) -> bool:
+def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, obstacles, last: bool) -> bool:
     placed: list[int] = []
+    fixed = [(np.array([x, y]), r) for x, y, r in obstacles]
     tries = MAX_TRIES if last else MAX_TRIES // 10
     for i in order:
         x0, x1, y0, y1 = regions[i]
@@ -49,7 +52,9 @@ def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separatio
         hi = np.array([max(x1 - r, x0 + r), max(y1 - r, y0 + r)])
         for _ in range(tries):
             p = lo + (hi - lo) * rng.uniform(0, 1, size=2)
-            if all(np.linalg.norm(p - xy[e, j]) >= r + radii[j] + min_separation for j in placed):
+            if all(np.linalg.norm(p - xy[e, j]) >= r + radii[j] + min_separation for j in placed) and all(
+                np.linalg.norm(p - c) >= r + rc + min_separation for c, rc in fixed
+            ):
                 break
         else:
             if not last:
