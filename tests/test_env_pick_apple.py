@@ -227,3 +227,18 @@ def test_robot_model_payload_sags_as_the_impedance_law_predicts(tmp_path):
     assert predicted.abs().max() > 5e-3  # a visible effect
     torch.testing.assert_close(sag, predicted, atol=0.2 * predicted.abs().max().item(), rtol=0)
     env.close()
+
+
+def test_gripper_state_does_not_leak_across_resets():
+    """A gripper closed at the end of one episode is open in the next (the drive target is reset)."""
+    env = gym.make(ENV, obs_mode="state")
+    env.reset(seed=0)
+    u = env.unwrapped
+    for _ in range(15):
+        env.step(hold_action(env, 1.0))
+    assert u.agent.gripper_position.item() > 0.9
+    env.reset(seed=1)
+    for _ in range(10):
+        env.step(hold_action(env, 0.0))
+    assert u.agent.gripper_position.item() < 0.05
+    env.close()

@@ -265,6 +265,8 @@ class RobotiqGripperController(PDJointPosMimicController):
     def reset(self):
         super().reset()
         self._goal_qpos = self._target_qpos.clone()
+        # the drive may still hold the previous episode's target; idle steps skip writing it
+        self.set_drive_targets(self._target_qpos)
 
     def set_action(self, action):
         if self.config.max_speed is None:
