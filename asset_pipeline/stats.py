@@ -15,6 +15,7 @@ def catalog_stats(records: list[CatalogRecord]) -> dict:
         "objects": len(records),
         "categories": len(by_cat),
         "real_mesh_objects": sum(r.real_mesh for r in records),
+        "unique_real_shapes": unique_real_shapes(records),
         "unseen_objects": sum(not r.seen for r in records),
         "unseen_categories": len({r.category for r in records if not r.seen}),
         "textured_objects": sum(r.textured for r in records),
@@ -23,6 +24,25 @@ def catalog_stats(records: list[CatalogRecord]) -> dict:
         "by_decomposition": dict(sorted(Counter(r.decomposition for r in records).items())),
         "by_size_class": dict(sorted(Counter(r.size_class for r in records).items())),
     }
+
+
+def unique_real_shapes(records: list[CatalogRecord]) -> int:
+    """Distinct source meshes behind the real-mesh objects (colour variants of one file count once).
+
+    Files are compared by content when still readable (the same mesh shipped by two packages counts
+    once), else by path."""
+    import hashlib
+
+    keys: set[str] = set()
+    for r in records:
+        if not r.real_mesh:
+            continue
+        p = Path(r.source_path)
+        try:
+            keys.add(hashlib.sha1(p.read_bytes()).hexdigest())
+        except OSError:
+            keys.add(r.source_path)
+    return len(keys)
 
 
 def contact_sheet(root: Path, records: list[CatalogRecord], path: Path, per_category: int = 2, tile: int = 96, cols: int = 24) -> int:

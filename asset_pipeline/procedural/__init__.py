@@ -13,6 +13,7 @@ from asset_pipeline.procedural import (  # noqa: F401  (imported for registratio
     drinkware,
     fruit,
     nondroid,
+    nondroid_more,
     packages,
     tableware,
     utensils,

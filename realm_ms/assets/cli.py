@@ -95,7 +95,8 @@ def _stats(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(st))
         return 0
-    print(f"catalog {root}: {st['objects']} objects, {st['categories']} categories, {st['real_mesh_objects']} from real meshes, "
+    print(f"catalog {root}: {st['objects']} objects, {st['categories']} categories, {st['real_mesh_objects']} from real meshes "
+          f"({st['unique_real_shapes']} unique shapes), "
           f"{st['unseen_objects']} unseen ({st['unseen_categories']} categories), {st['textured_objects']} textured")
     print("by source:      " + ", ".join(f"{k} {v}" for k, v in st["by_source"].items()))
     print("decomposition:  " + ", ".join(f"{k} {v}" for k, v in st["by_decomposition"].items()))
