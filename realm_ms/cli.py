@@ -54,4 +54,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # `python -m realm_ms.cli` runs this file as __main__: use the package's module so that
+    # realm_ms.cli.UserError raised by subcommands is the class caught above
+    from realm_ms.cli import main as _main
+
+    sys.exit(_main())

@@ -241,6 +241,8 @@ class DroidArmDriver:
         if self.config.model_rate == "control":
             kp, kd, bias, q_ref, dg = self._terms
             bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]  # first-order gravity between refreshes
+        if act:
+            state.extra["bias"] = bias  # model feed-forward, reused by effects (saves them an RNEA)
         tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
         tau = torch.clamp(tau, self._neg_effort_limits, self.effort_limits)
         if act:
