@@ -44,10 +44,6 @@ class ImpedanceGains:
     kx: tuple[float, ...]
     kxd: tuple[float, ...]
 
-    def scaled(self, stiffness: float = 1.0, damping: float = 1.0) -> "ImpedanceGains":
-        s = lambda v, k: tuple(float(x) * k for x in v)  # noqa: E731
-        return ImpedanceGains(s(self.kq, stiffness), s(self.kqd, damping), s(self.kx, stiffness), s(self.kxd, damping))
-
 
 GAIN_PRESETS: dict[str, ImpedanceGains] = {
     # fairo franka_hardware.yaml since 2022-08-09 (commit 2de742c): what current DROID sites run

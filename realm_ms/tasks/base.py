@@ -2,6 +2,8 @@
 
 Episode protocol (REALM, with its pitfalls fixed):
 - 15 Hz absolute joint-position control of the DROID Panda (``droid_joint_pos``), 120 Hz physics;
+- cameras ``exterior_1``, ``exterior_2``, ``wrist``: DROID's 1280x720 optics, observed at
+  ``camera_width`` x ``camera_height`` (default 320x180; pass 1280x720 for native frames);
 - objects are placed collision-free at their resting height from a seeded per-env RNG;
 - the object reference pose is captured ``settle_steps`` control steps after reset (the analogue
   of REALM's warm-up), so stages cannot latch on placement transients; no stage is met before;
@@ -28,9 +30,6 @@ from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
 from realm_ms.tasks.scenes import get_scene
 from realm_ms.tasks.spec import CameraSpec, TaskSpec
-
-NATIVE_RESOLUTION = (1280, 720)  # DROID cameras; pass camera_width=1280, camera_height=720 for full frames
-
 
 class RealmEnv(BaseEnv):
     """Base of all REALM-* envs. Subclasses only set ``task_spec`` (see ``spec.register_task``)."""

@@ -190,10 +190,6 @@ class ProgressionTracker:
         else:
             self.met[env_idx] = False
 
-    def evaluate_stages(self, x: StageInputs) -> torch.Tensor:
-        """Unlatched predicate values (B, N), for unit tests and diagnostics."""
-        return torch.stack([PREDICATES[s](x, self.thresholds) for s in self.stages], dim=1)
-
     def update(self, x: StageInputs, active: torch.Tensor | None = None) -> torch.Tensor:
         """Latch newly met stages in order; returns progression (B,) in [0, 1].
 
