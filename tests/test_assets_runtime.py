@@ -139,8 +139,9 @@ def test_random_objects_dropped_on_table_come_to_rest():
 
 
 def test_real_mesh_objects_dropped_on_table_come_to_rest(tmp_path):
-    """Same drop test on built real-mesh objects: the user-folder fixtures always, plus a few
-    objects from each installed package source (skipped silently when a package is absent)."""
+    """Same drop test on built real-mesh objects: the user-folder fixtures and ManiSkill's meshes
+    (a core dependency) always, plus a few objects from each optional package source that is
+    installed (skipped silently when absent)."""
     import importlib.util
     from pathlib import Path
 
@@ -161,7 +162,7 @@ def test_real_mesh_objects_dropped_on_table_come_to_rest(tmp_path):
     (user / "toy").mkdir()
     meshes.concave(user / "toy")
     cfg = BuildConfig(coacd=CoacdSettings(budget_s=8, mcts_iterations=20), thumbnails=False, stable_poses=False)
-    rep = build_catalog([str(user), "libero", "rgb_objects", "pybullet", "ycb"], tmp_path / "cat", cfg, progress=False,
+    rep = build_catalog([str(user), "maniskill", "libero", "rgb_objects", "pybullet", "ycb"], tmp_path / "cat", cfg, progress=False,
                         limit_per_source=2, strict=False)
     assert rep.failed == 0 and rep.built >= 3
     cat = BuiltCatalog(tmp_path / "cat")
