@@ -226,7 +226,6 @@ def grasp(ctx: Ctx, obj, tries: int = 3, clearance: float = 0.10, point=None, ya
     for attempt in range(tries):
         pos, r = ctx.obj_pose(obj)
         ext = obj.extents
-        centre = ctx.to_base(obj.anchor_pos())
         if point is not None:
             g = np.asarray(point(ctx), float)
         else:

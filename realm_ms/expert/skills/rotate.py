@@ -40,7 +40,7 @@ def rotate(ctx, tries: int = 3):
             return min(cands, key=lambda y: abs(y - DEFAULT_YAW))
 
     for attempt in range(tries):
-        ok = yield from grasp(ctx, obj, point=point, yaw=yaw)
+        yield from grasp(ctx, obj, point=point, yaw=yaw)
         yield from lift(ctx, 0.03)
         # turn away from the wrist limit: towards the default yaw side
         sign = 1.0 if ctx.cmd.yaw < DEFAULT_YAW + 0.3 else -1.0
