@@ -81,7 +81,7 @@ def register_task(spec: TaskSpec, base=None):
     """Create and register the env class for ``spec``; returns it."""
     from mani_skill.utils.registration import register_env
 
-    from realm_ms.tasks.base import RealmEnv
+    from realm_ms.tasks.env import RealmEnv
 
     if spec.env_id in TASKS:
         raise ValueError(f"task {spec.env_id} declared twice")
