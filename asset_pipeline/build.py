@@ -66,6 +66,24 @@ def resolve_source(spec: str, cfg: BuildConfig) -> Iterator[SourceItem]:
     return src.items(root)
 
 
+def _origin(item: SourceItem) -> str:
+    """What an item is made from: the same origin twice (a source listed twice) is one object."""
+    return repr(item.procedural) if item.procedural is not None else str(item.mesh)
+
+
+def _unique_id(item: SourceItem, items: dict[str, SourceItem]) -> str | None:
+    """``item.id``, or for a *different* object whose name maps to a taken id (``a b.obj`` and
+    ``a_b.obj`` both slug to ``a_b``) the id with a short hash of its file path; None for a duplicate."""
+    first = items.get(item.id)
+    if first is None:
+        return item.id
+    if _origin(first) == _origin(item):
+        return None
+    import hashlib
+
+    return f"{item.id}-{hashlib.sha1(_origin(item).encode()).hexdigest()[:6]}"
+
+
 def enumerate_items(sources: Iterable[str], cfg: BuildConfig, limit_per_source: int | None = None, strict: bool = True) -> tuple[list[SourceItem], dict[str, str]]:
     items: dict[str, SourceItem] = {}
     skipped: dict[str, str] = {}
@@ -75,7 +93,10 @@ def enumerate_items(sources: Iterable[str], cfg: BuildConfig, limit_per_source: 
             for i, item in enumerate(it):
                 if limit_per_source is not None and i >= limit_per_source:
                     break
-                items.setdefault(item.id, item)
+                oid = _unique_id(item, items)
+                if oid is not None:
+                    item.id = oid
+                    items[oid] = item
         except SourceUnavailable as e:
             if strict:
                 raise

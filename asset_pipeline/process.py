@@ -19,7 +19,7 @@ from asset_pipeline.export import AtomicDir, write_convex_obj, write_glb
 from asset_pipeline.procedural.materialize import object_dirname
 from asset_pipeline.record import CatalogRecord
 from asset_pipeline.semantics import size_class
-from asset_pipeline.sources.base import SourceItem
+from asset_pipeline.sources.source import SourceItem
 from asset_pipeline.stages import MeshError
 from asset_pipeline.stages.appearance import dominant_colors, render_thumbnail
 from asset_pipeline.stages.decompose import Decomposition, clean_hulls, decompose

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
-from asset_pipeline.record import CatalogRecord, read_catalog
+from asset_pipeline.record import CatalogRecord
 
 
 def catalog_stats(records: list[CatalogRecord]) -> dict:
@@ -67,7 +67,3 @@ def contact_sheet(root: Path, records: list[CatalogRecord], path: Path, per_cate
         draw.text((x + 2, y + tile), r.category[:16], fill=(0, 0, 0))
     sheet.save(path)
     return len(chosen)
-
-
-def load_stats(root: Path) -> dict:
-    return catalog_stats(read_catalog(root))

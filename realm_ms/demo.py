@@ -18,11 +18,14 @@ DEFAULT_OUT = Path("outputs/demo")
 def add_parser(sub) -> None:
     p = sub.add_parser("demo", help="run the scripted expert on REALM tasks; write videos + a progression table")
     p.add_argument("--tasks", default="all", help="comma-separated env ids, or 'all' (default)")
-    p.add_argument("--out", type=Path, default=DEFAULT_OUT)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--shader", default="default", help="default (raster) | rt | rt-med | rt-fast")
+    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output directory (default {DEFAULT_OUT})")
+    p.add_argument("--seed", type=int, default=0, help="episode seed, integer (default 0)")
+    from realm_ms.rendering import SHADERS  # the one shader table
+
+    p.add_argument("--shader", default="default", choices=SHADERS,
+                   help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
     p.add_argument("--max-steps", type=int, default=300, help="control steps per episode (REALM: 800)")
-    p.add_argument("--no-video", action="store_true")
+    p.add_argument("--no-video", action="store_true", help="skip the mp4 per task (faster)")
     p.add_argument("--force", action="store_true", help="re-run tasks already in summary.json")
     p.set_defaults(func=run)
 

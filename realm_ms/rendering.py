@@ -1,39 +1,266 @@
-"""Shader selection for REALM cameras: raster (``default``) or ray-traced (``rt``, ``rt-med``, ``rt-fast``).
+"""Camera rendering for REALM: the shader of every camera, a ray-tracing denoiser that cannot fail
+silently, the raster/ray-tracing light balance, and REALM's V-LIGHT units.
 
-ManiSkill's ray-tracing presets ask for the OptiX denoiser, which needs an NVIDIA RTX GPU; on
-CPU (lavapipe) or other GPUs we drop the denoiser instead of logging errors every frame. The REALM
-protocol renders with path tracing (``rt``); raster is orders of magnitude faster on CPU
-(see README, "Rendering speed").
+One place decides the shader config of every camera (both exterior cameras and the wrist camera):
+:func:`camera_shader_config`. Shaders: ``default`` (raster), ``rt-fast`` / ``rt-med`` / ``rt``
+(path tracing, ManiSkill presets), ``minimal``.
+
+Denoiser (ray-tracing shaders only): ``auto`` probes, once per process, OptiX, then OIDN, on a tiny
+render in a child process and takes the first that really denoises (a probe frame must be
+non-blank and differ from the undenoised frame: SAPIEN renders undenoised, or black, when a
+denoiser fails to initialise, and only logs the error); with no CUDA device it is ``none``. One
+warning names the choice. Forcing ``optix`` or ``oidn`` probes that one and raises
+:class:`DenoiserUnavailable` when it does not work, instead of rendering black or noisy frames.
 """
 
 from __future__ import annotations
 
 import copy
 import functools
+import json
+import os
+import subprocess
+import sys
+import warnings
+from dataclasses import dataclass
 
 import numpy as np
-from mani_skill.render.shaders import PREBUILT_SHADER_CONFIGS, ShaderConfig
+
+SHADERS = ("default", "rt-fast", "rt-med", "rt", "minimal")
+DENOISERS = ("auto", "optix", "oidn", "none")
+_AUTO_ORDER = ("optix", "oidn")
+
+# Frames whose per-pixel standard deviation (0..255 scale) is below this are blank (black/flat).
+BLANK_STD = 2.0
+
+# Scene lights are calibrated on the raster shader. Path-traced frames with a short path depth
+# miss the indirect bounce light and come out darker; every scene multiplies its light colours
+# (ambient included) by ``light_gain(shader)``: the one knob of the rt/raster balance, checked by
+# tests/test_rendering.py::test_rt_exposure_matches_raster (mean and contrast within tolerance).
+LIGHT_GAIN = {"default": 1.0, "minimal": 1.0, "rt-fast": 1.15, "rt-med": 1.05, "rt": 1.0}
+
+
+class DenoiserUnavailable(RuntimeError):
+    """A forced denoiser failed its probe (no NVIDIA GPU, driver too old, OptiX error...)."""
+
+
+def is_ray_traced(shader: str) -> bool:
+    return shader.startswith("rt")
+
+
+def _check_shader(shader: str) -> None:
+    if shader not in SHADERS:
+        raise ValueError(f"unknown shader {shader!r}; choose one of {', '.join(SHADERS)}")
+
+
+def _check_denoiser(denoiser: str) -> None:
+    if denoiser not in DENOISERS:
+        raise ValueError(f"unknown denoiser {denoiser!r}; choose one of {', '.join(DENOISERS)}")
+
+
+# ---------------------------------------------------------------------------------------- denoiser
+@dataclass(frozen=True)
+class ProbeResult:
+    denoiser: str
+    ok: bool
+    reason: str  # why not (or "denoised"), with the renderer's own error lines when there are any
 
 
 @functools.cache
-def optix_available() -> bool:
+def cuda_available() -> bool:
+    """An NVIDIA driver usable from this process (OptiX and SAPIEN's OIDN build both need one)."""
     try:
         import torch
 
-        return torch.cuda.is_available()
+        return bool(torch.cuda.is_available())
     except Exception:  # noqa: BLE001 - any failure means no usable CUDA driver
         return False
 
 
-def shader_config(name: str) -> ShaderConfig:
-    if name not in PREBUILT_SHADER_CONFIGS:
-        raise ValueError(f"unknown shader {name!r}; choose one of {sorted(PREBUILT_SHADER_CONFIGS)}")
-    cfg = copy.deepcopy(PREBUILT_SHADER_CONFIGS[name])
-    if cfg.shader_pack_config.get("ray_tracing_denoiser") == "optix" and not optix_available():
-        cfg.shader_pack_config["ray_tracing_denoiser"] = "none"
+def optix_available() -> bool:
+    """Kept for callers of the old API: true when the OptiX denoiser passes its probe."""
+    return probe_denoiser("optix").ok
+
+
+@functools.cache
+def probe_denoiser(denoiser: str, timeout_s: float = 180.0) -> ProbeResult:
+    """Render a tiny path-traced frame with and without ``denoiser`` in a child process (a failing
+    OptiX context cannot poison this one) and check that it is non-blank and really denoised."""
+    _check_denoiser(denoiser)
+    if denoiser in ("none", "auto"):
+        raise ValueError("probe_denoiser checks 'optix' or 'oidn'")
+    cmd = [sys.executable, "-m", "realm_ms.rendering", "--probe", denoiser]
+    try:
+        out = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, env=os.environ.copy())
+    except subprocess.TimeoutExpired:
+        return ProbeResult(denoiser, False, f"probe render timed out after {timeout_s:.0f} s")
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
+    errors = [ln.split("] ")[-1].strip() for ln in out.stderr.splitlines() if "error" in ln.lower()]
+    err = "; ".join(dict.fromkeys(errors))[:300]
+    if out.returncode != 0 or not lines:
+        return ProbeResult(denoiser, False, f"probe crashed (exit {out.returncode}){': ' + err if err else ''}")
+    r = json.loads(lines[-1])
+    if r["std"] < BLANK_STD:
+        return ProbeResult(denoiser, False, f"blank frame (std {r['std']:.2f}){': ' + err if err else ''}")
+    if r["diff"] < 1e-6:
+        return ProbeResult(denoiser, False, f"frame not denoised{': ' + err if err else ''}")
+    return ProbeResult(denoiser, True, "denoised")
+
+
+@functools.cache
+def resolve_denoiser(requested: str = "auto") -> str:
+    """The denoiser ray-traced cameras use in this process (decided once; one warning on ``auto``)."""
+    _check_denoiser(requested)
+    if requested == "none":
+        return "none"
+    if requested != "auto":
+        res = probe_denoiser(requested)
+        if not res.ok:
+            raise DenoiserUnavailable(f"denoiser {requested!r} does not work here ({res.reason}); use denoiser='auto' or 'none'")
+        return requested
+    if not cuda_available():
+        _warn("none (no CUDA device: OptiX and OIDN need an NVIDIA GPU); ray-traced frames are noisy")
+        return "none"
+    failed = []
+    for name in _AUTO_ORDER:
+        res = probe_denoiser(name)
+        if res.ok:
+            _warn(name + (f" ({'; '.join(failed)})" if failed else ""))
+            return name
+        failed.append(f"{name} failed: {res.reason}")
+    _warn("none (" + "; ".join(failed) + "); ray-traced frames are noisy")
+    return "none"
+
+
+def _warn(choice: str) -> None:
+    warnings.warn(f"realm_ms ray-tracing denoiser: {choice}", RuntimeWarning, stacklevel=3)
+
+
+# ---------------------------------------------------------------------------------------- shaders
+def camera_shader_config(shader: str = "default", denoiser: str = "auto"):
+    """The ManiSkill ``ShaderConfig`` for every REALM camera (exterior and wrist).
+
+    Ray-traced shaders get the denoiser :func:`resolve_denoiser` picks (probed once per process);
+    raster shaders ignore ``denoiser`` (it is still validated).
+    """
+    from mani_skill.render.shaders import PREBUILT_SHADER_CONFIGS
+
+    _check_shader(shader)
+    _check_denoiser(denoiser)
+    cfg = copy.deepcopy(PREBUILT_SHADER_CONFIGS[shader])
+    if is_ray_traced(shader):
+        cfg.shader_pack_config["ray_tracing_denoiser"] = resolve_denoiser(denoiser)
     return cfg
 
 
+def shader_config(name: str, denoiser: str = "auto"):
+    """Alias of :func:`camera_shader_config` (older call sites)."""
+    return camera_shader_config(name, denoiser)
+
+
+def light_gain(shader: str) -> float:
+    """Multiplier a scene applies to all its light colours under ``shader`` (see ``LIGHT_GAIN``)."""
+    _check_shader(shader)
+    return LIGHT_GAIN[shader]
+
+
+# ---------------------------------------------------------------------------------------- V-LIGHT
+# REALM (Isaac Sim) sets one intensity I ~ U(20,000, 750,000) on every scene light plus a colour
+# N([255, 214, 170], 15)/255. Isaac's RTX camera auto-exposes and tone-maps, so pixel brightness
+# grows far slower than I; we map I onto a multiplier of our scenes' calibrated lights with a
+# square-root law anchored at the geometric mid-range (see docs/rendering.md).
+REALM_LIGHT_RANGE = (20_000.0, 750_000.0)
+REALM_LIGHT_REF = float(np.sqrt(REALM_LIGHT_RANGE[0] * REALM_LIGHT_RANGE[1]))  # ~122,474 -> gain 1
+REALM_LIGHT_EXPONENT = 0.5
+REALM_LIGHT_COLOR = (255.0, 214.0, 170.0)
+
+
+def realm_light_to_scene(intensity: float, color=REALM_LIGHT_COLOR) -> np.ndarray:
+    """RGB multiplier for our scene lights equivalent to REALM's V-LIGHT ``intensity`` and ``color``
+    (0..255 per channel): ``(intensity / REALM_LIGHT_REF) ** 0.5 * color / 255``.
+
+    ``realm_light_to_scene(20_000)`` -> 0.40 x warm white, ``(750_000)`` -> 2.47 x warm white.
+    Multiply each scene light's colour (and the ambient term) by it.
+    """
+    if not np.isfinite(intensity) or intensity <= 0:
+        raise ValueError(f"light intensity must be positive, got {intensity}")
+    c = np.clip(np.asarray(color, float), 0, 255) / 255.0
+    if c.shape != (3,):
+        raise ValueError(f"light colour must be 3 values in 0..255, got {color}")
+    return (float(intensity) / REALM_LIGHT_REF) ** REALM_LIGHT_EXPONENT * c
+
+
+# ---------------------------------------------------------------------------------------- helpers
 def vertical_fov(hfov_deg: float, width: int, height: int) -> float:
     """ManiSkill cameras take the vertical FOV (rad); DROID camera specs give the horizontal one."""
     return float(2 * np.arctan(np.tan(np.deg2rad(hfov_deg) / 2) * height / width))
+
+
+def frame_stats(img) -> tuple[float, float]:
+    """(mean, std) of an RGB frame on the 0..255 scale (uint8 or float in 0..1, any leading dims)."""
+    raw = np.asarray(img.cpu() if hasattr(img, "cpu") else img)
+    a = raw[..., :3].astype(np.float64)
+    if not np.issubdtype(raw.dtype, np.integer):
+        a = np.clip(a, 0.0, 1.0) * 255.0
+    return float(a.mean()), float(a.std())
+
+
+def is_blank(img, min_std: float = BLANK_STD) -> bool:
+    return frame_stats(img)[1] < min_std
+
+
+def _probe_main(denoiser: str) -> None:
+    """Child-process side of :func:`probe_denoiser`: a box on a plane, 48x32, 2 spp."""
+    import sapien
+
+    sapien.render.set_camera_shader_dir("rt")
+    sapien.render.set_ray_tracing_samples_per_pixel(2)
+    sapien.render.set_ray_tracing_path_depth(2)
+    scene = sapien.Scene()
+    scene.set_ambient_light([0.3, 0.3, 0.3])
+    scene.add_directional_light([0.3, 0.4, -1], [1, 1, 1])
+    b = scene.create_actor_builder()
+    b.add_box_visual(half_size=[0.1, 0.1, 0.1], material=sapien.render.RenderMaterial(base_color=[0.8, 0.3, 0.2, 1]))
+    b.add_box_visual(pose=sapien.Pose([0, 0, -0.11]), half_size=[1, 1, 0.01], material=sapien.render.RenderMaterial(base_color=[0.6, 0.6, 0.6, 1]))
+    b.build_static()
+    frames = []
+    for den in ("none", denoiser):  # the denoiser is bound when a camera is created
+        sapien.render.set_ray_tracing_denoiser(den)
+        cam = scene.add_camera(f"probe_{den}", 48, 32, 1.0, 0.01, 10.0)
+        cam.entity.set_pose(sapien.Pose([-0.5, 0, 0.2], [0.9848, 0, 0.1736, 0]))
+        scene.update_render()
+        cam.take_picture()
+        frames.append(np.clip(cam.get_picture("Color")[..., :3], 0, 1) * 255.0)
+    print(json.dumps({"mean": float(frames[1].mean()), "std": float(frames[1].std()),
+                      "diff": float(np.abs(frames[1] - frames[0]).mean())}), flush=True)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) == 3 and sys.argv[1] == "--probe":
+        _probe_main(sys.argv[2])
+    else:
+        raise SystemExit("usage: python -m realm_ms.rendering --probe {optix,oidn}")
+
+
+# ---------------------------------------------------------------------------------------- settings
+@dataclass(frozen=True)
+class CameraSettings:
+    """What every REALM camera (exterior and wrist) renders: observation size in pixels, shader and
+    denoiser. One value configures all three cameras, so they can never disagree."""
+
+    width: int = 320
+    height: int = 180
+    shader: str = "default"
+    denoiser: str = "auto"
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 1 <= int(v) <= 8192:
+                raise ValueError(f"camera_{name} must be a whole number of pixels in 1..8192, got {v!r}")
+            object.__setattr__(self, name, int(v))
+        _check_shader(self.shader)
+        _check_denoiser(self.denoiser)
+
+    def shader_config(self):
+        return camera_shader_config(self.shader, self.denoiser)

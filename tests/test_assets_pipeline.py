@@ -16,7 +16,7 @@ from asset_pipeline.config import BuildConfig
 from asset_pipeline.export import read_convex_obj
 from asset_pipeline.process import process_item
 from asset_pipeline.record import read_catalog
-from asset_pipeline.sources.base import SourceItem
+from asset_pipeline.sources.source import SourceItem
 from asset_pipeline.stages.decompose import CoacdSettings, decompose
 from asset_pipeline.stages.normalize import guess_units
 

@@ -14,7 +14,7 @@ from asset_pipeline.categories import category_info
 from asset_pipeline.config import BuildConfig
 from asset_pipeline.export import read_convex_obj
 from asset_pipeline.procedural import REGISTRY, categories, make_object
-from asset_pipeline.procedural import nondroid_more
+from asset_pipeline.procedural import nondroid_curios
 from asset_pipeline.procedural.colors import PALETTE
 from asset_pipeline.process import process_item
 from asset_pipeline.record import CatalogRecord
@@ -23,7 +23,7 @@ from asset_pipeline.stats import catalog_stats
 
 NEW_SOURCES = {"metaworld": "metaworld", "gymnasium_robotics": "gymnasium-robotics", "genesis": "genesis-world", "maniskill": "mani-skill"}
 FAST = BuildConfig(use_coacd=False, thumbnails=False, object_timeout_s=120)
-NEW_CATEGORIES = sorted(n for n, c in REGISTRY.items() if c.generate.__module__ == nondroid_more.__name__)
+NEW_CATEGORIES = sorted(n for n, c in REGISTRY.items() if c.generate.__module__ == nondroid_curios.__name__)
 
 
 def test_new_sources_are_registered_and_in_the_default_build():

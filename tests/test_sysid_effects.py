@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import torch
 
-from realm_ms.sysid.effects import CONFOUNDS, EFFECTS, make_effect
-from realm_ms.sysid.spec import parse_effects
+from realm_ms.agents.effects import CONFOUNDS, EFFECTS, make_effect
+from realm_ms.sysid.effect_spec import parse_effects
 
 NAMES = ["coulomb_friction", "viscous_damping", "stribeck_friction", "armature", "payload", "gravity_comp_error",
          "latency", "gain_mismatch", "torque_limit", "backlash", "encoder_bias"]
@@ -138,7 +138,7 @@ def test_benchmark_stage_interface():
 
     model = ReplaySimulator.__new__(ReplaySimulator)  # only for the ArmModel path
     from realm_ms.agents.arm_model import ArmModel
-    from realm_ms.sysid.urdf import BASE_LINK, TIP_LINK, source_urdf_path
+    from realm_ms.sysid.locked_urdf import BASE_LINK, TIP_LINK, source_urdf_path
 
     arm = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
     stages = [make_effect(n) for n in NAMES]

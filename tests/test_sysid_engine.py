@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from realm_ms.sysid.effects import make_effect
+from realm_ms.agents.effects import make_effect
 from realm_ms.sysid.engine import Evaluator
 from realm_ms.sysid.excite import ExciteConfig, excite
 

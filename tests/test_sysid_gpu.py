@@ -8,7 +8,7 @@ pytestmark = pytest.mark.skipif(not torch.cuda.is_available(), reason="needs CUD
 
 
 def test_gpu_matches_cpu():
-    from realm_ms.sysid.effects import make_effect
+    from realm_ms.agents.effects import make_effect
     from realm_ms.sysid.excite import ExciteConfig, excite
     from realm_ms.sysid.gpu import GpuReplaySimulator
     from realm_ms.sysid.simulator import ReplaySimulator

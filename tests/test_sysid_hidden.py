@@ -1,4 +1,4 @@
-"""Proof on data with a hidden effect (issue 3): the hidden effect is ranked first (first two for a
+"""Proof on data with a hidden effect: the hidden effect is ranked first (first two for a
 documented confound pair), fitting it brings the held-out RMSE to <= 1.5x the noise floor (and
 >= 5x down from the start for a strong effect), parameters come back within 20 %, and data with
 no hidden effect yields "no missing effect".
@@ -14,10 +14,10 @@ import pytest
 
 from realm_ms.sysid.data_io import load_split
 from realm_ms.sysid.diagnose import diagnose
-from realm_ms.sysid.effects import confounded_with
+from realm_ms.agents.effects import confounded_with
 from realm_ms.sysid.engine import Evaluator
 from realm_ms.sysid.fit import FitConfig, fit
-from realm_ms.sysid.spec import parse_effects
+from realm_ms.sysid.effect_spec import parse_effects
 from realm_ms.sysid.synth import SynthConfig, synth
 
 NOISE = 2e-4

@@ -30,7 +30,7 @@ def test_one_dimensional_and_checkpoint_resume(tmp_path):
 
 def test_linearized_step_recovers_a_viscous_coefficient(tmp_path):
     from realm_ms.sysid.data_io import load_dir
-    from realm_ms.sysid.effects import make_effect
+    from realm_ms.agents.effects import make_effect
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.optimize import Group, linearized_step
     from realm_ms.sysid.replay import SegmentSet

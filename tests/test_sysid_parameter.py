@@ -1,9 +1,9 @@
-"""realm_ms.sysid.parameter: units, bounds, normalised coordinates."""
+"""realm_ms.agents.effects.parameter: units, bounds, normalised coordinates."""
 
 import numpy as np
 import pytest
 
-from realm_ms.sysid.parameter import ParamSet, ParamSpec, format_value
+from realm_ms.agents.effects.parameter import ParamSet, ParamSpec, format_value
 
 
 def test_lin_and_log_round_trip():

@@ -3,8 +3,8 @@
 import pytest
 
 from realm_ms.agents.actuation import ActuationModel
-from realm_ms.sysid.robot_model import RobotModel, load_actuation_model
-from realm_ms.sysid.spec import parse_effects
+from realm_ms.agents.robot_model import RobotModel, load_actuation_model
+from realm_ms.sysid.effect_spec import parse_effects
 
 
 def test_round_trip(tmp_path):

@@ -6,7 +6,7 @@ import pytest
 
 from realm_ms.sysid.engine import Evaluator
 from realm_ms.sysid.fit import compare
-from realm_ms.sysid.robot_model import RobotModel
+from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.synth import SynthConfig, synth
 
 

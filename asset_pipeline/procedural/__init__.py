@@ -6,6 +6,7 @@ Public entry points: :func:`make_object` (alias ``procedural_object``), :data:`R
 
 from __future__ import annotations
 
+# registration order = REGISTRY order (kept stable: catalog listings follow it)
 from asset_pipeline.procedural import (  # noqa: F401  (imported for registration side effects)
     balls,
     blocks,
@@ -13,13 +14,13 @@ from asset_pipeline.procedural import (  # noqa: F401  (imported for registratio
     drinkware,
     fruit,
     nondroid,
-    nondroid_more,
-    packages,
+    nondroid_curios,
+    boxed_goods,
     tableware,
     utensils,
     writing,
 )
-from asset_pipeline.procedural.base import REGISTRY, CategoryDef, ProceduralObject, make_object, object_id, parse_object_id
+from asset_pipeline.procedural.object_model import REGISTRY, CategoryDef, ProceduralObject, make_object, object_id, parse_object_id
 
 procedural_object = make_object
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from asset_pipeline.procedural import geometry as g
-from asset_pipeline.procedural.base import Geometry, category, part
+from asset_pipeline.procedural.object_model import Geometry, category, part
 
 BALL = dict(family="balls", theme="sports", friction=0.8, shapes=("round", "spherical"))
 

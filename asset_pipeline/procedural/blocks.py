@@ -6,7 +6,7 @@ import numpy as np
 import trimesh
 
 from asset_pipeline.procedural import geometry as g
-from asset_pipeline.procedural.base import Geometry, category, part
+from asset_pipeline.procedural.object_model import Geometry, category, part
 
 TOY = dict(family="blocks", theme="toys", friction=0.7)
 BRIGHT = ("red", "green", "blue", "yellow", "orange", "purple", "pink", "teal", "white", "black")

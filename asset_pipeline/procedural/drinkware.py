@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from asset_pipeline.procedural import geometry as g
-from asset_pipeline.procedural.base import Geometry, category, part
+from asset_pipeline.procedural.object_model import Geometry, category, part
 
 DRINK = dict(family="drinkware", theme="containers")
 CERAMIC = ("white", "red", "blue", "green", "yellow", "black", "grey", "pink", "teal", "orange", "cream", "navy")

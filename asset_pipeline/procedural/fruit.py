@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from asset_pipeline.procedural import geometry as g
-from asset_pipeline.procedural.base import Geometry, category, part
+from asset_pipeline.procedural.object_model import Geometry, category, part
 
 FOOD = dict(family="fruit", theme="food", friction=0.8)
 

@@ -9,7 +9,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from asset_pipeline.export import AtomicDir, coloured_parts_scene, write_convex_obj, write_glb
-from asset_pipeline.procedural.base import ProceduralObject
+from asset_pipeline.procedural.object_model import ProceduralObject
 from asset_pipeline.record import CatalogRecord
 from asset_pipeline.semantics import size_class
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from asset_pipeline.procedural import geometry as g
-from asset_pipeline.procedural.base import Geometry, category, part
+from asset_pipeline.procedural.object_model import Geometry, category, part
 
 KITCHEN = dict(family="tableware", theme="containers", friction=0.6)
 CERAMIC = ("white", "cream", "blue", "light blue", "green", "red", "grey", "black", "yellow", "teal", "beige")

@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from asset_pipeline.categories import infer_category
-from asset_pipeline.sources.base import SourceItem, register_source
+from asset_pipeline.sources.source import SourceItem, register_source
 
 MESH_EXTS = (".obj", ".glb", ".gltf", ".stl", ".ply", ".dae", ".off")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from pathlib import Path
 
-from asset_pipeline.sources.base import SourceItem, register_source
+from asset_pipeline.sources.source import SourceItem, register_source
 
 DEFAULT_VARIANTS = 40
 

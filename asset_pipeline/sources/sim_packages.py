@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from pathlib import Path
 
-from asset_pipeline.sources.base import SourceItem, package_dir, register_source
+from asset_pipeline.sources.source import SourceItem, package_dir, register_source
 
 
 def _items(root: Path, source: str, licence: str, table, *, known_scale: bool) -> Iterator[SourceItem]:

@@ -40,15 +40,6 @@ def face_colors(g: trimesh.Trimesh) -> np.ndarray:
     return np.full((len(g.faces), 3), 0.6)
 
 
-def mean_color(scene: trimesh.Scene) -> np.ndarray:
-    cols, areas = [], []
-    for g in scene.geometry.values():
-        cols.append(face_colors(g))
-        areas.append(g.area_faces)
-    c, a = np.vstack(cols), np.concatenate(areas)
-    return (c * a[:, None]).sum(0) / max(a.sum(), 1e-12)
-
-
 def dominant_colors(scene: trimesh.Scene, k: int = 2) -> list[str]:
     """Colour words for a real mesh: palette names of the two largest area-weighted colour clusters."""
     from asset_pipeline.categories import nearest_colour_names

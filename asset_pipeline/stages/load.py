@@ -10,7 +10,7 @@ import trimesh
 from asset_pipeline.export import coloured_parts_scene, pbr_material, read_convex_obj
 from asset_pipeline.procedural.colors import PALETTE
 from asset_pipeline.semantics import Semantics
-from asset_pipeline.sources.base import SourceItem
+from asset_pipeline.sources.source import SourceItem
 from asset_pipeline.stages import MeshError
 
 Y_UP_TO_Z_UP = trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))

@@ -53,12 +53,3 @@ def normalize(scene: trimesh.Scene, hulls: list[trimesh.Trimesh] | None, oid: st
     for h in hulls or []:
         h.apply_transform(T)
     return NormalizeReport(unit, float(k), [float(x) for x in (hi - lo) * k])
-
-
-def rest_on_plane(scene: trimesh.Scene, hulls: list[trimesh.Trimesh] | None) -> None:
-    """Re-centre after rotations: bottom centre of the visual to the origin."""
-    v = np.vstack([g.vertices for g in scene.geometry.values()])
-    lo, hi = v.min(0), v.max(0)
-    shift = -np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
-    for m in list(scene.geometry.values()) + list(hulls or []):
-        m.apply_translation(shift)

@@ -66,6 +66,11 @@ class ActuationStage:
     def plant_torque(self, state: ControlState) -> torch.Tensor | None:
         return None
 
+    def plant_inertia(self, state: ControlState) -> torch.Tensor | None:
+        """Joint-space inertia (B, n, n) this stage adds to the plant (armature, payload), so the
+        driver's step-exact integration predicts the plant it drives; None = none."""
+        return None
+
 
 class ActuationModel(ActuationStage):
     """An ordered chain of stages that behaves as one stage."""
@@ -108,6 +113,14 @@ class ActuationModel(ActuationStage):
         total = None
         for s in self.stages:
             t = s.plant_torque(state)
+            if t is not None:
+                total = t if total is None else total + t
+        return total
+
+    def plant_inertia(self, state):
+        total = None
+        for s in self.stages:
+            t = s.plant_inertia(state)
             if t is not None:
                 total = t if total is None else total + t
         return total

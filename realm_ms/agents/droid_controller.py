@@ -6,11 +6,23 @@ with J the flange Jacobian, C and g from the robot's own model (``ArmModel``; li
 gravity on the real robot, so the simulated arm keeps gravity and the controller cancels it with
 its model), and the torque clipped to the Franka limits (87 / 12 N.m).
 
-Numerics: at 120 Hz an explicit damping torque on the light wrist is unstable (h*Kd/I > 2 for
-joint 7 with the gripper, I ~ 6e-3 kg.m^2). The diagonal damping is therefore carried by PhysX's
-*implicit* joint drive (stiffness 0, damping d_i), and the explicit torque is corrected by the
-drive's first-order estimate (+d_i qd) so the total equals the law above; only the integrator
-changes. ``implicit_damping=False`` gives the purely explicit law (stable only at >= ~1 kHz).
+Numerics (``DroidControlConfig.integrator``). The real law runs at 1 kHz on a continuous plant; the
+benchmark steps PhysX at 120 Hz, where an explicit damping torque on the light wrist is unstable
+(h*Kd/I ~ 4 for joint 7 with the gripper, I ~ 5e-3 kg.m^2).
+
+- ``"exact"`` (default): over each physics step the closed loop of the law on the robot's model
+  is linear (M, Kp, Kd held, the Coriolis/gravity feed-forward cancels the plant's), so its state
+  after h is ``expm(A h) x``. The driver applies the one torque that makes PhysX's semi-implicit
+  Euler step land on that *position*; the velocity PhysX then holds is the step's average, and the
+  difference to the predicted end velocity is carried to the next step's velocity estimate. This
+  reproduces a 1 kHz controller on a continuous plant to < 1 mrad RMS at 120 Hz (MuJoCo reference,
+  ``realm_ms/sysid/reference_mujoco.py``; docs/robot.md). Known plant inertia (joint armature,
+  build-time effects) enters the prediction.
+- ``"implicit_damping"`` (the former default): the diagonal damping rides on PhysX's implicit joint
+  drive and the explicit torque pre-compensates it with +d*qd. Stable, but the drive acts on the
+  *end* velocity, which adds an apparent armature d*h (0.025 kg.m^2 on joint 7 at 120 Hz, 5x its
+  inertia): 16-32 mrad RMS off the 1 kHz reference on 10 s excitation logs.
+- ``"explicit"``: the law as is, stable only at >= ~1 kHz.
 
 ``DroidArmDriver`` is the backend-free core (batched torch); ``DroidJointImpedanceController`` binds
 it to a ManiSkill articulation (physx_cpu and physx_cuda). The sysid replay simulator binds the same
@@ -29,8 +41,8 @@ from mani_skill.agents.controllers.base_controller import BaseController, Contro
 
 from realm_ms.agents.actuation import ActuationModel, ControlState
 from realm_ms.agents.arm_model import ArmModel
+from realm_ms.agents.urdf import ARM_JOINTS, DROID_RESET_QPOS
 
-ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 FRANKA_EFFORT_LIMITS = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
 
 
@@ -123,15 +135,26 @@ class DroidControlConfig:
     effort_limits: tuple[float, ...] = FRANKA_EFFORT_LIMITS
     coriolis_feedforward: bool = True  # on in Polymetis and (via a YAML slip) in REALM
     gravity_compensation: bool = True  # libfranka compensates gravity with its model
-    implicit_damping: bool = True  # see module docstring
+    integrator: str = "exact"  # "exact" | "implicit_damping" | "explicit": see the module docstring
+    implicit_damping: bool | None = None  # legacy switch: True = "implicit_damping", False = "explicit"
     # damping carried implicitly, N.m.s/rad per joint; None = the law's diagonal at ``reference_qpos``
     implicit_damping_values: tuple[float, ...] | None = None
-    reference_qpos: tuple[float, ...] = (0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0)
+    reference_qpos: tuple[float, ...] = DROID_RESET_QPOS
     joint_physics: JointPhysics | str = "realm"
     # "physics": J, C(q, qd) and g(q) from the model every physics step (as Polymetis at 1 kHz).
     # "control": refreshed once per control step, gravity corrected to first order in between;
     # the feedback on q, qd still runs every physics step. Faster on CPU; see bench/step_rate.py.
     model_rate: str = "physics"
+    law_hz: float = 1000.0  # "exact": the controller rate it reproduces (Polymetis / libfranka: 1 kHz)
+
+    def __post_init__(self):
+        if self.implicit_damping is not None:  # legacy boolean wins when given
+            self.integrator = "implicit_damping" if self.implicit_damping else "explicit"
+        if self.integrator not in INTEGRATORS:
+            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {self.integrator!r}")
+
+
+INTEGRATORS = ("exact", "implicit_damping", "explicit")
 
 
 class DroidArmDriver:
@@ -165,14 +188,18 @@ class DroidArmDriver:
         self.inertia_lower_bound = 0.5 * torch.diagonal(self.model.mass_matrix(ref)[0]) + self.armature
         self.q_target = torch.zeros(num_envs, model.dof, device=self.device)
         self._terms = None  # cached (kp, kd, bias, q_ref, dg/dq) for model_rate="control"
+        self._step = None  # "exact": cached (M, Phi) of the closed loop, refreshed with each target
         if config.model_rate not in ("physics", "control"):
             raise ValueError(f"model_rate must be 'physics' or 'control', got {config.model_rate!r}")
         self.time = torch.zeros(num_envs, device=self.device)
         self.motor_torque = torch.zeros(num_envs, model.dof, device=self.device)  # commanded after limits/actuator
         self.applied_torque = torch.zeros(num_envs, model.dof, device=self.device)  # + joint friction and plant effects
+        # "exact": predicted end-of-step velocity minus the step-average velocity PhysX holds
+        self.velocity_correction = torch.zeros(num_envs, model.dof, device=self.device)
+        self._eye = torch.eye(model.dof, device=self.device)
 
     def _implicit_damping(self, gains: ImpedanceGains) -> torch.Tensor:
-        if not self.config.implicit_damping:
+        if self.config.integrator != "implicit_damping":
             return torch.zeros(self.model.dof, device=self.device)
         if self.config.implicit_damping_values is not None:
             return torch.as_tensor(self.config.implicit_damping_values, device=self.device, dtype=torch.float32)
@@ -186,14 +213,15 @@ class DroidArmDriver:
         idx = slice(None) if env_idx is None else env_idx
         self.q_target[idx] = q[idx, : self.model.dof]
         self.time[idx] = 0.0
-        self._terms = None
+        self._terms = self._step = None
         self.motor_torque[idx] = 0.0
         self.applied_torque[idx] = 0.0
+        self.velocity_correction[idx] = 0.0
         self.actuation.reset(self.num_envs, self.device, env_idx, q[:, : self.model.dof])
 
     def set_target(self, q_target: torch.Tensor) -> None:
         self.q_target = q_target.to(self.device, torch.float32)
-        self._terms = None  # model_rate="control": refresh J, C, g at the first physics step
+        self._terms = self._step = None  # refresh J, C, g (model_rate="control") and Phi ("exact")
 
     def _bias(self, q: torch.Tensor, qd: torch.Tensor, frames: torch.Tensor) -> torch.Tensor:
         """Feed-forward from the robot's model: Coriolis and/or gravity, as configured."""
@@ -222,28 +250,55 @@ class DroidArmDriver:
         return ((g[0] - g[1]) / (2 * eps)).transpose(1, 2)
 
     def torque(self, q: torch.Tensor, qd: torch.Tensor, dt: float) -> torch.Tensor:
-        """Explicit joint torque to apply this physics step (the implicit drive adds the rest)."""
+        """Joint torque to apply this physics step (with ``"implicit_damping"`` the drive adds the rest)."""
         act = self.actuation
+        exact = self.config.integrator == "exact"
+        if exact:  # the plant's velocity at the step start (PhysX holds the last step's average)
+            qd_held = qd
+            qd = qd + self.velocity_correction
         if act:
             state = ControlState(q=q, qd=qd, q_target=self.q_target, dt=dt, model=self.model, time=self.time)
             q_m, qd_m = act.measure(q, qd, state)
             q_t = state.q_target = act.command(self.q_target, state)
         else:  # nominal robot: skip the stage plumbing (this runs 8x per action)
             q_m, qd_m, q_t = q, qd, self.q_target
-        if self.config.model_rate == "physics" or self._terms is None:
-            kp, kd, bias = self._law_terms(q_m, qd_m, act.gains(self.gains) if act else self.gains)
+        gains = act.gains(self.gains) if act else self.gains
+        if exact:
+            # the closed loop's step matrices once per target (J, M change little within 8 ms);
+            # then only the feed-forward is needed per physics step
+            if self._step is None:
+                kp, kd, bias = self._law_terms(q_m, qd_m, gains)
+                self._step = self._step_matrices(q_m, kp, kd, dt, state if act else None)
+                if self.config.model_rate == "control":
+                    self._terms = (None, None, bias, q_m.clone(), self._gravity_jacobian(q_m))
+            elif self.config.model_rate == "physics":
+                bias = self._bias(q_m, qd_m, self.model.link_frames(q_m))
             if self.config.model_rate == "control":
-                self._terms = (kp, kd, bias, q_m.clone(), self._gravity_jacobian(q_m))
-        if self.config.model_rate == "control":
-            kp, kd, bias, q_ref, dg = self._terms
-            bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]  # first-order gravity between refreshes
+                _, _, bias, q_ref, dg = self._terms
+                bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]
+        else:
+            if self.config.model_rate == "physics" or self._terms is None:
+                kp, kd, bias = self._law_terms(q_m, qd_m, gains)
+                if self.config.model_rate == "control":
+                    self._terms = (kp, kd, bias, q_m.clone(), self._gravity_jacobian(q_m))
+            if self.config.model_rate == "control":
+                kp, kd, bias, q_ref, dg = self._terms
+                bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]  # first-order gravity between refreshes
         if act:
             state.extra["bias"] = bias  # model feed-forward, reused by effects (saves them an RNEA)
-        tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
-        tau = torch.clamp(tau, self._neg_effort_limits, self.effort_limits)
+        if exact:
+            tau, v_end, v_avg = self._exact_torque(q_m - q_t, qd_m, qd_held + (qd_m - qd), self._step)
+            tau = tau + bias
+        else:
+            tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
+        clamped = torch.clamp(tau, self._neg_effort_limits, self.effort_limits)
         if act:
-            tau = act.actuator(tau, state)
-        self.motor_torque = tau
+            clamped = act.actuator(clamped, state)
+        if exact:
+            # where the torque was limited the prediction does not hold: no correction there
+            held = ((clamped - tau).abs() < 1e-4).all(-1, keepdim=True)
+            self.velocity_correction = torch.where(held, v_end - v_avg, 0.0)
+        tau = self.motor_torque = clamped
         # joint friction is physics, not command: it acts on the true velocity
         friction = self._neg_friction * torch.tanh(qd / self.joint_physics.friction_velocity)
         tau = tau + limit_dissipative(friction, qd, self.inertia_lower_bound, dt)
@@ -254,12 +309,49 @@ class DroidArmDriver:
         self.applied_torque = tau
         self.time = self.time + dt
         # the implicit drive will apply about -d*qd; pre-compensate so the total matches the law
-        return tau + self.implicit_damping * qd
+        return tau + self.implicit_damping * qd if self.config.integrator == "implicit_damping" else tau
+
+    def _step_matrices(self, q: torch.Tensor, kp: torch.Tensor, kd: torch.Tensor, dt: float, state) -> tuple:
+        """(M, Phi, dt) with Phi the state transition over one physics step dt of the law's closed loop,
+        x = (q - q*, qd), evaluated on the model's inertia plus what the driver knows of the plant's
+        (joint armature, build-time effects). The law is sampled at ``law_hz`` with a zero-order hold
+        and the plant between ticks is M qdd = tau (the feed-forward cancels Coriolis and gravity), so
+        one tick T is exactly  Phi_T = [[I - T^2/2 P, T I - T^2/2 D], [-T P, I - T D]],  P = M^-1 Kp,
+        D = M^-1 Kd,  and Phi = Phi_T^n with n = round(dt * law_hz) ticks of T = dt / n."""
+        mass = self.model.mass_matrix(q) + torch.diag_embed(self.armature).expand(q.shape[0], -1, -1)
+        extra = self.actuation.plant_inertia(state) if state is not None else None
+        if extra is not None:
+            mass = mass + extra
+        n = q.shape[1]
+        ticks = max(1, round(dt * self.config.law_hz))
+        t = dt / ticks
+        minv = torch.linalg.inv(mass)
+        p, d = minv @ kp, minv @ kd
+        eye = self._eye.to(q.dtype)
+        phi = torch.empty(q.shape[0], 2 * n, 2 * n, device=q.device, dtype=q.dtype)
+        phi[:, :n, :n] = eye - (0.5 * t * t) * p
+        phi[:, :n, n:] = t * eye - (0.5 * t * t) * d
+        phi[:, n:, :n] = -t * p
+        phi[:, n:, n:] = eye - t * d
+        return mass, torch.linalg.matrix_power(phi, ticks), dt
+
+    @staticmethod
+    def _exact_torque(err: torch.Tensor, qd: torch.Tensor, qd_held: torch.Tensor, step: tuple):
+        """Torque (without feed-forward) that moves the plant to the closed loop's position after dt
+        with one semi-implicit Euler step from the velocity the engine holds (``qd_held``); also the
+        predicted end and average velocities."""
+        mass, phi, dt = step
+        n = err.shape[1]
+        x1 = (phi @ torch.cat([err, qd], 1)[..., None])[..., 0]
+        v_avg = (x1[:, :n] - err) / dt
+        tau = (mass @ ((v_avg - qd_held) / dt)[..., None])[..., 0]
+        return tau, x1[:, n:], v_avg
 
 
 def configure_arm_joints(joints_per_arm_joint, driver: DroidArmDriver) -> None:
-    """Set the PhysX side of the driver's contract on SAPIEN joints: a zero-stiffness drive carrying
-    the implicit damping, the armature, and no PhysX friction (the driver applies friction in N.m).
+    """Set the PhysX side of the driver's contract on SAPIEN joints: a zero-stiffness drive (carrying
+    the implicit damping with ``integrator="implicit_damping"``, else none), the armature, no PhysX
+    friction (the driver applies friction in N.m) and no link damping on the joint's child link.
     ``joints_per_arm_joint[i]`` is a list of ``PhysxArticulationJoint`` for arm joint i (one per env).
     """
     damping = driver.implicit_damping.cpu().numpy()
@@ -269,6 +361,14 @@ def configure_arm_joints(joints_per_arm_joint, driver: DroidArmDriver) -> None:
             j.set_drive_properties(0.0, float(damping[i]), force_limit=1e6, mode="force")
             j.set_friction(0.0)
             j.set_armature([float(armature[i])])
+            zero_link_damping(j.get_child_link())
+
+
+def zero_link_damping(link) -> None:
+    """PhysX's default link damping (0.05 1/s, linear and angular) is not part of a rigid-body arm: it
+    drags the wrist through the whole arm's motion (0.1-0.3 mrad RMS against the MuJoCo reference)."""
+    link.set_linear_damping(0.0)
+    link.set_angular_damping(0.0)
 
 
 # ---------------------------------------------------------------------------- ManiSkill binding
@@ -311,6 +411,8 @@ class DroidJointImpedanceController(BaseController):
         if not self.scene._gpu_sim_initialized:
             for link in self.articulation.links:
                 link.disable_gravity = False  # the controller compensates gravity like libfranka
+                for obj in link._objs:  # the gripper rides on the arm: no link damping anywhere
+                    zero_link_damping(obj)
 
     def reset(self):
         mask = self.scene._reset_mask

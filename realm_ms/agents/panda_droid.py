@@ -27,15 +27,13 @@ from realm_ms.agents import robotiq_2f85 as gripper
 from realm_ms.agents.actuation import ActuationModel
 from realm_ms.agents.arm_model import ArmModel
 from realm_ms.agents.droid_controller import (
-    ARM_JOINTS,
     DroidControlConfig,
     DroidJointImpedanceControllerConfig,
 )
 from realm_ms.contacts import any_contact
-from realm_ms.rendering import shader_config, vertical_fov
-from realm_ms.agents.urdf import CAMERA_LINK, FLANGE_LINK, TCP_LINK, panda_droid_urdf_path
+from realm_ms.rendering import CameraSettings, vertical_fov
+from realm_ms.agents.urdf import ARM_JOINTS, CAMERA_LINK, DROID_RESET_QPOS, FLANGE_LINK, TCP_LINK, panda_droid_urdf_path
 
-DROID_RESET_ARM_QPOS = (0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0)
 WRIST_HFOV_DEG = 87.7  # ZED mini, DROID wrist camera
 
 
@@ -58,11 +56,15 @@ class PandaDroid(BaseAgent):
     load_multiple_collisions = True
     urdf_config = gripper.URDF_CONFIG
     keyframes = dict(
-        droid_reset=Keyframe(qpos=np.array(DROID_RESET_ARM_QPOS + (0.0,) * len(gripper.GRIPPER_JOINTS)), pose=sapien.Pose()),
+        droid_reset=Keyframe(qpos=np.array(DROID_RESET_QPOS + (0.0,) * len(gripper.GRIPPER_JOINTS)), pose=sapien.Pose()),
     )
 
-    # configurable per instance before loading (e.g. by the env): Polymetis gains preset etc.
-    droid_control = DroidControlConfig()
+    def __init__(self, *args, droid_control: DroidControlConfig | None = None, camera: CameraSettings | None = None, **kwargs):
+        """``droid_control``: the Polymetis law's settings; ``camera``: the wrist camera's size and
+        shader (the env passes the settings its exterior cameras use)."""
+        self.droid_control = droid_control if droid_control is not None else DroidControlConfig()
+        self.camera = camera if camera is not None else CameraSettings()
+        super().__init__(*args, **kwargs)
 
     @property
     def urdf_path(self) -> str:
@@ -97,7 +99,7 @@ class PandaDroid(BaseAgent):
     def set_robot_model(self, model) -> None:
         """Use identified dynamics: a ``MODEL.yaml`` path, a dict, or an ``ActuationModel``."""
         if not isinstance(model, ActuationModel):
-            from realm_ms.sysid.robot_model import load_actuation_model
+            from realm_ms.agents.robot_model import load_actuation_model
 
             model = load_actuation_model(model)
         arm = self.controllers["droid_joint_pos"].controllers["arm"] if "droid_joint_pos" in self.controllers else None
@@ -107,17 +109,13 @@ class PandaDroid(BaseAgent):
         model.build(self.robot, arm.active_joint_indices.tolist())
 
     # ------------------------------------------------------------------ sensors
-    # (width, height, shader pack) of the wrist camera; envs set it before sensors are created
-    wrist_camera: tuple[int, int, str] = (320, 180, "default")
-
     @property
     def _sensor_configs(self):
-        w, h, shader = self.wrist_camera
-        fovy = vertical_fov(WRIST_HFOV_DEG, w, h)
+        c = self.camera
         return [
             CameraConfig(
-                "wrist", pose=sapien.Pose(), width=w, height=h, fov=fovy, near=0.01, far=10.0,
-                mount=self.robot.links_map[CAMERA_LINK], shader_config=shader_config(shader),
+                "wrist", pose=sapien.Pose(), width=c.width, height=c.height, fov=vertical_fov(WRIST_HFOV_DEG, c.width, c.height),
+                near=0.01, far=10.0, mount=self.robot.links_map[CAMERA_LINK], shader_config=c.shader_config(),
             )
         ]
 

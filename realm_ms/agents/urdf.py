@@ -17,6 +17,8 @@ alone, root link ``robotiq_arg2f_base_link``; handy for gripper-only tests), :fu
 
 from __future__ import annotations
 
+import math
+
 import functools
 import hashlib
 import os
@@ -43,6 +45,8 @@ __all__ = [
 _RENDER_VERSION = "1"  # bump when the rendering logic changes (invalidates caches)
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
+#: DROID's reset pose of the arm (rad): every task's default start, the controller's reference, excitation home
+DROID_RESET_QPOS = (0.0, -math.pi / 5, 0.0, -4 * math.pi / 5, 0.0, 3 * math.pi / 5, 0.0)
 FLANGE_LINK = "panda_link8"
 GRIPPER_BASE_LINK = "robotiq_arg2f_base_link"
 TCP_LINK = "tcp"

@@ -8,33 +8,48 @@ from pathlib import Path
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    from asset_pipeline.sources import DEFAULT_SOURCES, SOURCES
+    from realm_ms.validate import integer, positive
+
     p = subparsers.add_parser("assets", help="build and inspect the object catalog", description=__doc__)
     sub = p.add_subparsers(dest="assets_cmd", metavar="VERB")
-    p.set_defaults(func=lambda a: (p.print_help(), 2)[1])
+    p.set_defaults(func=lambda a: (p.print_help(), 2)[1], needs_envs=False)
 
+    names = [n for n in SOURCES if n != "folder"]
     b = sub.add_parser("build", help="process mesh sources into a simulation-ready catalog")
     b.add_argument("--source", action="append", default=[], metavar="SRC",
-                   help="procedural | ycb | libero | robosuite | rgb_objects | robocasa | pybullet | NAME=PATH | a folder of meshes (repeatable)")
-    b.add_argument("--all", action="store_true", help="every default source that is installed (the full default catalog)")
-    b.add_argument("--out", type=Path, default=None, help="catalog directory (default: $REALM_ASSETS_DIR or ~/.cache/realm_ms/catalog)")
-    b.add_argument("--workers", type=int, default=max(1, (__import__("os").cpu_count() or 1)), help="parallel worker processes")
-    b.add_argument("--variants", type=int, default=None, help="procedural objects per category (default 40)")
-    b.add_argument("--limit", type=int, default=None, help="at most N objects per source (smoke tests)")
-    b.add_argument("--timeout", type=float, default=None, help="per-object wall-clock limit in seconds (default 240)")
-    b.add_argument("--coacd-budget", type=float, default=None, help="CoACD time budget per object before the hull fallback (default 60)")
+                   help=f"{' | '.join(names)} | NAME=PATH (a source's files at PATH) | a folder of meshes "
+                        "(repeatable; `--all` = every installed one)")
+    b.add_argument("--all", action="store_true",
+                   help=f"every default source that is installed ({', '.join(DEFAULT_SOURCES)})")
+    b.add_argument("--out", type=Path, default=None, metavar="DIR",
+                   help="catalog directory (default: $REALM_ASSETS_DIR or ~/.cache/realm_ms/catalog)")
+    b.add_argument("--workers", type=integer(1), default=max(1, (__import__("os").cpu_count() or 1)), metavar="N",
+                   help="parallel worker processes, integer >= 1 (default: CPU count)")
+    b.add_argument("--variants", type=integer(1), default=None, metavar="N",
+                   help="procedural objects per category, integer >= 1 (default 40)")
+    b.add_argument("--limit", type=integer(1), default=None, metavar="N",
+                   help="at most N objects per source, integer >= 1 (smoke tests; default: all)")
+    b.add_argument("--timeout", type=positive("s"), default=None, metavar="SECONDS",
+                   help="per-object wall-clock limit in s, > 0 (default 240)")
+    b.add_argument("--coacd-budget", type=positive("s"), default=None, metavar="SECONDS",
+                   help="CoACD time budget per object in s before the convex-hull fallback, > 0 (default 60)")
     b.add_argument("--no-coacd", action="store_true", help="convex hulls instead of CoACD (fast, coarse)")
-    b.add_argument("--no-thumbnails", action="store_true")
+    b.add_argument("--no-thumbnails", action="store_true", help="skip the 128 px thumbnail per object")
     b.add_argument("--ray", action="store_true", help="run objects as Ray tasks")
-    b.add_argument("--ray-address", default=None, help="connect to an existing Ray cluster (implies --ray)")
+    b.add_argument("--ray-address", default=None, metavar="HOST:PORT",
+                   help="connect to an existing Ray cluster (implies --ray)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
-    b.add_argument("--json", action="store_true", help="print the build report as JSON")
+    b.add_argument("--json", action="store_true", help="print the build report as JSON on stdout")
     b.set_defaults(func=_build)
 
     s = sub.add_parser("stats", help="counts by category/source/seen-unseen and a contact sheet")
-    s.add_argument("catalog", nargs="?", type=Path, default=None, help="catalog directory (default: $REALM_ASSETS_DIR)")
-    s.add_argument("--json", action="store_true", help="print machine-readable counts")
-    s.add_argument("--sheet", type=Path, default=None, help="contact sheet path (default: CATALOG/contact_sheet.png)")
-    s.add_argument("--no-sheet", action="store_true")
+    s.add_argument("catalog", nargs="?", type=Path, default=None, metavar="CATALOG",
+                   help="catalog directory (default: $REALM_ASSETS_DIR or ~/.cache/realm_ms/catalog)")
+    s.add_argument("--json", action="store_true", help="print machine-readable counts on stdout")
+    s.add_argument("--sheet", type=Path, default=None, metavar="FILE.png",
+                   help="contact sheet path (default: CATALOG/contact_sheet.png)")
+    s.add_argument("--no-sheet", action="store_true", help="skip the contact sheet")
     s.set_defaults(func=_stats)
 
 
@@ -48,9 +63,9 @@ def _build(args: argparse.Namespace) -> int:
 
     if not args.source and not args.all:
         raise UserError("give --source SRC (repeatable) or --all")
-    if args.workers < 1:
-        raise UserError("--workers must be >= 1")
-    out = args.out or default_catalog_dir()
+    from realm_ms.validate import check_output_dir
+
+    out = check_output_dir(args.out or default_catalog_dir(), "--out")
     cfg = BuildConfig(workers=args.workers, use_coacd=not args.no_coacd, thumbnails=not args.no_thumbnails)
     if args.variants is not None:
         cfg.procedural_variants = args.variants
@@ -85,6 +100,10 @@ def _stats(args: argparse.Namespace) -> int:
     from realm_ms.assets.paths import ENV_CATALOG, default_catalog_dir
 
     root = args.catalog or default_catalog_dir()
+    if args.sheet is not None and not args.no_sheet:
+        from realm_ms.validate import check_output_file
+
+        check_output_file(args.sheet, "--sheet")
     if not (root / CATALOG_FILE).exists():
         raise UserError(f"no catalog at {root} (set ${ENV_CATALOG} or run `realm assets build --all --out {root}`)")
     recs = read_catalog(root)

@@ -30,7 +30,8 @@ class Expert:
         self.env = env.unwrapped if hasattr(env, "unwrapped") else env
         if self.env.agent.control_mode != "droid_joint_pos":
             raise ValueError(f"the expert drives droid_joint_pos, env uses {self.env.agent.control_mode!r}")
-        self.skill_name = skill or self.env.task_spec.skill
+        self._skill_arg = skill
+        self.skill_name = skill or getattr(self.env, "active_spec", self.env.task_spec).skill
         self.skill = SKILLS[self.skill_name]
         self.max_joint_step = max_joint_step
         self.ik = ArmIK.from_agent(self.env.agent)
@@ -38,6 +39,11 @@ class Expert:
 
     def reset(self) -> None:
         env = self.env
+        if self._skill_arg is None:  # the task as perturbed this episode (SB-VRB changes the verb)
+            from realm_ms.expert.skills import SKILLS
+
+            self.skill_name = getattr(env, "active_spec", env.task_spec).skill
+            self.skill = SKILLS[self.skill_name]
         n = env.num_envs
         self.base_p = env.agent.robot.pose.p.detach().cpu().clone()
         self.q_cmd = env.agent.arm_qpos.detach().cpu().double().clone()

@@ -16,7 +16,11 @@ import json
 from pathlib import Path
 from typing import Any
 
-from realm_ms.sysid.timeseries import DataError, Trajectory
+from realm_ms.sysid.timeseries import MIN_SAMPLES, DataError, Trajectory
+from realm_ms.validate import InputError, check_int, check_non_negative, check_positive
+
+#: shortest synthetic trajectory the other verbs accept: 1 s burn-in plus at least 1 s scored
+MIN_SYNTH_DURATION_S = 2.0
 
 
 def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3) -> tuple[list[Trajectory], list[Trajectory]]:
@@ -28,13 +32,25 @@ def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3) -> 
 
 
 def _model(model):
-    from realm_ms.sysid.robot_model import RobotModel
+    from realm_ms.agents.robot_model import RobotModel
 
     return RobotModel.load(model)
 
 
 def _evaluator(model, workers=None, device=None, progress: bool = True):
     import sys
+
+    if workers is not None:
+        workers = check_int(workers, "workers (--workers)", minimum=1)
+    if device is not None:
+        if device not in ("cpu", "cuda") and not str(device).startswith("cuda:"):
+            raise InputError(f"device (--device): unknown device {device!r}; use cpu or cuda")
+        if str(device).startswith("cuda"):
+            import torch
+
+            if not torch.cuda.is_available():
+                raise InputError("--device cuda: no CUDA GPU is available here (torch.cuda.is_available() is False); "
+                                 "use --device cpu or leave --device out")
 
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.simulator import SimConfig
@@ -46,7 +62,7 @@ def _evaluator(model, workers=None, device=None, progress: bool = True):
 
 def effects() -> list[dict[str, Any]]:
     """The effect library: name, summary, signature and parameters with units, bounds, off-values."""
-    from realm_ms.sysid.effects import EFFECTS, make_effect
+    from realm_ms.agents.effects import EFFECTS, make_effect
 
     out = []
     for name, cls in EFFECTS.items():
@@ -64,6 +80,8 @@ def effects() -> list[dict[str, Any]]:
 def excite(out: str | Path, n: int = 10, seed: int = 0, **config) -> list[Path]:
     from realm_ms.sysid.excite import ExciteConfig, write_excitation
 
+    check_int(n, "n (--n)", minimum=1)
+    check_int(seed, "seed (--seed)", minimum=0)
     return write_excitation(out, n, seed, ExciteConfig(**config))
 
 
@@ -71,6 +89,20 @@ def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, 
           workers: int | None = 1, **config) -> dict:
     from realm_ms.sysid.synth import SynthConfig, synth as _synth
 
+    check_int(seed, "seed (--seed)", minimum=0)
+    check_non_negative(noise_rad, "noise_rad (--noise)", "rad")
+    rate = check_positive(rate_hz, "rate_hz (--rate)", "Hz")
+    control = check_positive(config.get("control_hz", 15.0), "control_hz (--control-hz)", "Hz")
+    if rate < control:
+        raise InputError(f"rate_hz (--rate): {rate:g} Hz is below the control rate {control:g} Hz")
+    for key in ("n_train", "n_heldout"):
+        if key in config:
+            check_int(config[key], f"{key} (--{key.replace('_', '-')})", minimum=1)
+    duration = check_positive(config.get("duration_s", 10.0), "duration_s (--duration)", "s")
+    if duration < MIN_SYNTH_DURATION_S or duration * rate + 1 < MIN_SAMPLES:
+        raise InputError(f"duration_s (--duration): {duration:g} s is too short; every trajectory needs >= "
+                         f"{MIN_SYNTH_DURATION_S:g} s (1 s burn-in + scored time) and >= {MIN_SAMPLES} samples "
+                         f"(at {rate:g} Hz: >= {max(MIN_SYNTH_DURATION_S, (MIN_SAMPLES - 1) / rate):.3g} s)")
     return _synth(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config))
 
 
@@ -79,6 +111,7 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
     from realm_ms.sysid.data_io import load_dir
     from realm_ms.sysid.fit import compare as _compare
 
+    check_positive(segment_s, "segment_s (--segment)", "s")
     m = _model(model)
     trajs = data if isinstance(data, list) else load_dir(data)
     if heldout is not None:
@@ -103,7 +136,16 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
     from datetime import datetime, timezone
 
     from realm_ms.sysid.fit import FitConfig, fit as _fit
+    from realm_ms.validate import check_output_file
 
+    if config.get("popsize") is not None:
+        check_int(config["popsize"], "popsize (--popsize)", minimum=2)  # CMA-ES needs 2 to rank
+    if "generations" in config:
+        check_int(config["generations"], "generations (--generations)", minimum=1)
+    if out is not None:
+        check_output_file(out, "out (--out)")  # before the fit, not after it
+    if config.get("checkpoint"):
+        check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
     res = _fit(train, held, m, FitConfig(add=add, seed=seed, **config), _evaluator(m, workers, device), progress, log)
@@ -125,7 +167,9 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
 def report(data, model=None, out: str | Path = "report.html", heldout=None, seed: int = 0, diagnosis=None,
            fit_result=None, workers=None, device=None, waterfall: bool = True, log=print) -> Path:
     from realm_ms.sysid.report import build_report
+    from realm_ms.validate import check_output_file
 
+    check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
     diagnosis = _load_json(diagnosis, ("baseline", "suspects"), "diagnose --json")

@@ -31,7 +31,17 @@ def _user_input(what: str = ""):
     except FileNotFoundError as e:
         raise _user_error(f"{what}{e}") from None
     except (ValueError, KeyError) as e:
-        raise _user_error(f"{what}{str(e).strip(chr(34))}") from None
+        msg = e.args[0] if isinstance(e, KeyError) and e.args else e
+        raise _user_error(f"{what}{msg}") from None
+
+
+def _check_model(args) -> None:
+    """Load --model once up front: a bad file fails in a second, not after the data is read."""
+    if getattr(args, "model", None):
+        from realm_ms.agents.robot_model import RobotModel
+
+        with _user_input("--model: "):
+            RobotModel.load(args.model)
 
 
 def _write_json(path: str | None, data: dict) -> None:
@@ -46,18 +56,23 @@ def _write_json(path: str | None, data: dict) -> None:
     print(f"wrote {p}", file=sys.stderr)
 
 
-def _common(p: argparse.ArgumentParser, heldout: bool = True) -> None:
-    p.add_argument("--model", help="robot model (MODEL.yaml) to start from; default: the nominal DROID robot")
-    if heldout:
-        p.add_argument("--heldout", help="held-out data directory; default: split DATA by trajectory (seeded)")
-        p.add_argument("--seed", type=int, default=0, help="seed of the train/held-out split (default 0)")
-    p.add_argument("--workers", type=int, default=None, help="CPU worker processes (default: REALM_SYSID_WORKERS or min(2, cores))")
-    p.add_argument("--device", choices=["cpu", "cuda"], default=None, help="simulation device (default: cuda if available)")
-
-
 def _check_data(path: str) -> None:
     if not Path(path).exists():
         raise _user_error(f"DATA {path!r} does not exist (an npz directory or a LeRobot v3.0 dataset)")
+
+
+def _check_outputs(args, files: tuple[str, ...] = (), dirs: tuple[str, ...] = ()) -> None:
+    """Output paths are checked before the (long) work, so a run never fails at its end."""
+    from realm_ms.validate import check_output_dir, check_output_file
+
+    for flag in files:
+        value = getattr(args, flag.lstrip("-").replace("-", "_"), None)
+        if value:
+            check_output_file(value, flag)
+    for flag in dirs:
+        value = getattr(args, flag.lstrip("-").replace("-", "_"), None)
+        if value:
+            check_output_dir(value, flag)
 
 
 # ---------------------------------------------------------------------------- handlers
@@ -81,8 +96,9 @@ def _effects(args) -> int:
 def _excite(args) -> int:
     from realm_ms.sysid import api
 
-    if args.n < 1 or args.duration <= 1:
-        raise _user_error("--n must be >= 1 and --duration > 1 s")
+    if args.duration <= 1:
+        raise _user_error(f"--duration must be > 1 s, got {args.duration:g}")
+    _check_outputs(args, dirs=("--out",))
     paths = api.excite(args.out, n=args.n, seed=args.seed, duration_s=args.duration, control_hz=args.control_hz,
                        max_velocity=args.max_velocity)
     print(f"wrote {len(paths)} command trajectories ({args.duration:g} s at {args.control_hz:g} Hz) to {args.out}")
@@ -92,11 +108,14 @@ def _excite(args) -> int:
 def _synth(args) -> int:
     from realm_ms.sysid import api
 
-    if args.noise < 0 or args.rate <= 0:
-        raise _user_error("--noise must be >= 0 rad and --rate > 0 Hz")
+    from realm_ms.sysid.effect_spec import parse_effects
+
     if args.rate < args.control_hz:
-        raise _user_error(f"--rate {args.rate:g} Hz is below the control rate {args.control_hz:g} Hz")
+        raise _user_error(f"--rate {args.rate:g} Hz is below the control rate --control-hz {args.control_hz:g} Hz")
+    _check_outputs(args, dirs=("--out",))
     with _user_input("--hidden: "):
+        parse_effects(args.hidden, default_values="nominal")
+    with _user_input():
         info = api.synth(args.hidden, args.out, seed=args.seed, noise_rad=args.noise, rate_hz=args.rate,
                          n_train=args.n_train, n_heldout=args.n_heldout, duration_s=args.duration,
                          control_hz=args.control_hz)
@@ -109,6 +128,8 @@ def _compare(args) -> int:
     from realm_ms.sysid import api
 
     _check_data(args.data)
+    _check_outputs(args, files=("--json",))
+    _check_model(args)
     with _user_input():
         c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment)
     names = [f"J{i}" for i in range(1, 8)]
@@ -129,6 +150,8 @@ def _diagnose(args) -> int:
     kw = {}
     if args.candidates:
         kw["candidates"] = tuple(s.strip() for s in args.candidates.split(",") if s.strip())
+    _check_outputs(args, files=("--json",))
+    _check_model(args)
     with _user_input():
         d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
                          log=lambda m: print(m, file=sys.stderr), **kw)
@@ -146,6 +169,12 @@ def _fit(args) -> int:
     from realm_ms.sysid import api
 
     _check_data(args.data)
+    _check_outputs(args, files=("--out", "--json", "--checkpoint"))
+    _check_model(args)
+    with _user_input("--add: "):
+        from realm_ms.sysid.effect_spec import parse_effects
+
+        parse_effects(args.add)
     with _user_input():
         f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
@@ -168,6 +197,8 @@ def _report(args) -> int:
     from realm_ms.sysid import api
 
     _check_data(args.data)
+    _check_outputs(args, files=("--out",))
+    _check_model(args)
     with _user_input():
         p = api.report(args.data, args.model, args.out, args.heldout, args.seed, args.diagnosis, args.fit,
                        args.workers, args.device, waterfall=not args.no_waterfall, log=lambda m: print(m, file=sys.stderr))
@@ -176,71 +207,95 @@ def _report(args) -> int:
 
 
 # ---------------------------------------------------------------------------- parser
+def _common(p: argparse.ArgumentParser, heldout: bool = True) -> None:
+    from realm_ms.validate import integer
+
+    p.add_argument("--model", metavar="MODEL.yaml",
+                   help="robot model file to start from (default: the nominal DROID robot)")
+    if heldout:
+        p.add_argument("--heldout", metavar="DIR", help="held-out data directory (default: DATA/heldout when "
+                       "DATA has train/ and heldout/, else a seeded split of DATA by trajectory)")
+        p.add_argument("--seed", type=integer(0), default=0, help="seed of the train/held-out split, integer >= 0 (default 0)")
+    p.add_argument("--workers", type=integer(1), default=None, metavar="N",
+                   help="CPU worker processes, integer >= 1 (default: $REALM_SYSID_WORKERS or min(2, cores))")
+    p.add_argument("--device", choices=["cpu", "cuda"], default=None,
+                   help="simulation device (default: cuda if a GPU is available, else cpu)")
+
+
 def add_parser(subparsers) -> argparse.ArgumentParser:
+    from realm_ms.validate import integer, non_negative, positive
+
     p = subparsers.add_parser("sysid", help="system identification: compare, diagnose, fit, report",
-                              description="System identification of the DROID Panda against measured trajectories.")
+                              description="System identification of the DROID Panda against measured trajectories. "
+                                          "Units: rad, s, Hz, N·m. Bad input: one-line error, exit code 2.")
     sub = p.add_subparsers(dest="verb", metavar="VERB")
-    p.set_defaults(func=lambda a: (p.print_help(), 2)[1])
+    p.set_defaults(func=lambda a: (p.print_help(), 2)[1], needs_envs=False)
 
     s = sub.add_parser("effects", help="list the effect library with parameters and units")
-    s.add_argument("--json", action="store_true", help="machine-readable output")
+    s.add_argument("--json", action="store_true", help="print the library as JSON on stdout")
     s.set_defaults(func=_effects)
 
     s = sub.add_parser("excite", help="write identification command trajectories (15 Hz joint targets)")
-    s.add_argument("--out", required=True)
-    s.add_argument("--n", type=int, default=10)
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--duration", type=float, default=10.0, help="seconds per trajectory")
-    s.add_argument("--control-hz", type=float, default=15.0)
-    s.add_argument("--max-velocity", type=float, default=1.0, help="rad/s")
+    s.add_argument("--out", required=True, metavar="DIR", help="directory for excite_XXX.npz (created)")
+    s.add_argument("--n", type=integer(1), default=10, help="number of trajectories, integer >= 1 (default 10)")
+    s.add_argument("--seed", type=integer(0), default=0, help="random seed, integer >= 0 (default 0)")
+    s.add_argument("--duration", type=positive("s"), default=10.0, help="seconds per trajectory, > 1 s (default 10)")
+    s.add_argument("--control-hz", type=positive("Hz"), default=15.0, help="command rate in Hz, > 0 (default 15, DROID)")
+    s.add_argument("--max-velocity", type=positive("rad/s"), default=1.0,
+                   help="joint speed cap in rad/s, > 0 (default 1.0)")
     s.set_defaults(func=_excite)
 
     s = sub.add_parser("synth", help="measured-like data with a hidden effect, from the simulator")
-    s.add_argument("--hidden", required=True, help="EFFECT[:param=value,...][,EFFECT...] or none")
-    s.add_argument("--out", required=True)
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--noise", type=float, default=2e-4, help="sensor noise std [rad] (default 2e-4)")
-    s.add_argument("--rate", type=float, default=15.0, help="logging rate [Hz] (default 15)")
-    s.add_argument("--control-hz", type=float, default=15.0)
-    s.add_argument("--n-train", type=int, default=7)
-    s.add_argument("--n-heldout", type=int, default=3)
-    s.add_argument("--duration", type=float, default=10.0)
+    s.add_argument("--hidden", required=True, help="EFFECT[:param=value,...][,EFFECT...] or none "
+                   "(values in the units of `realm sysid effects`)")
+    s.add_argument("--out", required=True, metavar="DIR", help="output directory: train/, heldout/, truth.yaml, synth.json")
+    s.add_argument("--seed", type=integer(0), default=0, help="random seed, integer >= 0 (default 0)")
+    s.add_argument("--noise", type=non_negative("rad"), default=2e-4, help="sensor noise std in rad, >= 0 (default 2e-4)")
+    s.add_argument("--rate", type=positive("Hz"), default=15.0, help="logging rate in Hz, >= --control-hz (default 15)")
+    s.add_argument("--control-hz", type=positive("Hz"), default=15.0, help="command rate in Hz, > 0 (default 15)")
+    s.add_argument("--n-train", type=integer(1), default=7, help="training trajectories, integer >= 1 (default 7)")
+    s.add_argument("--n-heldout", type=integer(1), default=3, help="held-out trajectories, integer >= 1 (default 3)")
+    s.add_argument("--duration", type=positive("s"), default=10.0,
+                   help="seconds per trajectory, >= 2 s (default 10)")
     s.set_defaults(func=_synth)
 
     s = sub.add_parser("compare", help="replay DATA in simulation: per-joint error and noise floor")
-    s.add_argument("data")
+    s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")
     _common(s, heldout=False)
-    s.add_argument("--segment", type=float, default=8.0, help="multiple-shooting segment length [s]")
-    s.add_argument("--json")
+    s.add_argument("--segment", type=positive("s"), default=8.0,
+                   help="multiple-shooting segment length in s, > 0 (default 8)")
+    s.add_argument("--json", metavar="FILE", help="also write the result as JSON to FILE")
     s.set_defaults(func=_compare)
 
     s = sub.add_parser("diagnose", help="rank the missing effects by held-out improvement")
-    s.add_argument("data")
+    s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")
     _common(s)
-    s.add_argument("--candidates", help="comma-separated effect names (default: all)")
-    s.add_argument("--top", type=int, default=5)
-    s.add_argument("--json")
+    s.add_argument("--candidates", help="comma-separated effect names (default: all; see `realm sysid effects`)")
+    s.add_argument("--top", type=integer(1), default=5, help="suspects to print, integer >= 1 (default 5)")
+    s.add_argument("--json", metavar="FILE", help="also write the diagnosis as JSON to FILE")
     s.set_defaults(func=_diagnose)
 
     s = sub.add_parser("fit", help="add effects and fit their parameters with CMA-ES")
-    s.add_argument("data")
-    s.add_argument("--add", required=True, help="EFFECT[:param=start,...][,EFFECT...]")
-    s.add_argument("--out", required=True, help="MODEL.yaml to write")
+    s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")
+    s.add_argument("--add", required=True, help="EFFECT[:param=start,...][,EFFECT...] (start values in the units of "
+                   "`realm sysid effects`)")
+    s.add_argument("--out", required=True, metavar="MODEL.yaml", help="robot model file to write (not a directory)")
     _common(s)
-    s.add_argument("--generations", type=int, default=30)
-    s.add_argument("--popsize", type=int, default=None)
-    s.add_argument("--checkpoint", help="resumable optimiser state (pickle) written every generation")
+    s.add_argument("--generations", type=integer(1), default=30, help="CMA-ES generations at most, integer >= 1 (default 30)")
+    s.add_argument("--popsize", type=integer(2), default=None,
+                   help="CMA-ES candidates per generation, integer >= 2 (default 4 + 3 ln(parameters))")
+    s.add_argument("--checkpoint", metavar="FILE", help="resumable optimiser state (pickle) written every generation")
     s.add_argument("--no-refit", action="store_true", help="keep the --model's own parameters fixed (default: refit them jointly)")
-    s.add_argument("--no-progress", action="store_true")
-    s.add_argument("--json")
+    s.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    s.add_argument("--json", metavar="FILE", help="also write the fit result (history, before/after) as JSON to FILE")
     s.set_defaults(func=_fit)
 
     s = sub.add_parser("report", help="one self-contained HTML page: where the model fails, suspects, fit")
-    s.add_argument("data")
-    s.add_argument("--out", required=True)
+    s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")
+    s.add_argument("--out", required=True, metavar="FILE.html", help="HTML file to write (not a directory)")
     _common(s)
-    s.add_argument("--diagnosis", help="diagnose --json output to include (else computed)")
-    s.add_argument("--fit", help="fit --json output to include (history, before/after)")
+    s.add_argument("--diagnosis", metavar="FILE", help="diagnose --json output to include (else computed)")
+    s.add_argument("--fit", metavar="FILE", help="fit --json output to include (history, before/after)")
     s.add_argument("--no-waterfall", action="store_true", help="skip the effect-by-effect held-out waterfall")
     s.set_defaults(func=_report)
     return p

@@ -12,7 +12,8 @@ Two input formats (see ``docs/sysid.md``):
   are read directly (no video decoding).
 
 A DATA directory holding ``train/`` and ``heldout/`` subdirectories (what ``synth`` writes) is
-split that way; otherwise commands split it by trajectory (``timeseries.split``).
+split that way (``compare``, which does not split, reads both); otherwise commands split it by
+trajectory (``timeseries.split``).
 """
 
 from __future__ import annotations
@@ -25,30 +26,46 @@ import numpy as np
 from realm_ms.sysid.timeseries import DataError, Trajectory, validate
 
 NPZ_REQUIRED = ("t", "q", "q_cmd")
-NPZ_OPTIONAL = ("qd", "tau", "gripper", "gripper_cmd", "control_hz")
 
 
 def joint_limits() -> np.ndarray:
     from realm_ms.agents.arm_model import ArmModel
-    from realm_ms.sysid.urdf import BASE_LINK, TIP_LINK, source_urdf_path
+    from realm_ms.sysid.locked_urdf import BASE_LINK, TIP_LINK, source_urdf_path
 
     return ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK).q_limits
 
 
 def read_npz(path: Path) -> Trajectory:
     try:
+        with open(path, "rb") as f:
+            magic = f.read(4)
+    except OSError as e:
+        raise DataError(f"{path}: cannot open ({e.strerror})") from None
+    if magic[:2] != b"PK":  # every numpy.savez archive is a zip file
+        kind = "empty" if not magic else "a text file" if _is_text(path) else "not a zip archive"
+        raise DataError(f"{path}: not an .npz archive ({kind}); write trajectories with numpy.savez(path, t=..., q=..., q_cmd=...)")
+    try:
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
     except Exception as e:  # noqa: BLE001 - any unreadable file is a user error
-        raise DataError(f"{path}: cannot read as .npz ({type(e).__name__}: {e})") from None
+        raise DataError(f"{path}: cannot read as .npz ({type(e).__name__}: {' '.join(str(e).split())})") from None
     missing = [k for k in NPZ_REQUIRED if k not in data]
     if missing:
         raise DataError(f"{path}: missing key(s) {missing}; an .npz trajectory needs t (T,), q (T,7), q_cmd (T,7)")
-    hz = data.get("control_hz")
     return Trajectory(
         path.stem, data["t"], data["q"], data["q_cmd"], data.get("qd"), data.get("tau"),
-        data.get("gripper"), data.get("gripper_cmd"), float(hz) if hz is not None else None,
+        data.get("gripper"), data.get("gripper_cmd"), data.get("control_hz"), meta={"file": str(path)},
     )
+
+
+def _is_text(path: Path) -> bool:
+    with open(path, "rb") as f:
+        head = f.read(512)
+    try:
+        head.decode("utf-8")
+        return True
+    except UnicodeDecodeError:
+        return False
 
 
 def write_npz(path: Path, traj: Trajectory) -> None:
@@ -65,46 +82,93 @@ def write_npz(path: Path, traj: Trajectory) -> None:
     tmp.replace(path)
 
 
+def _shape(feat) -> list:
+    shape = feat.get("shape") if isinstance(feat, dict) else None
+    return list(shape) if isinstance(shape, (list, tuple)) else []
+
+
 def _lerobot_feature(info: dict, words: tuple[str, ...]) -> str | None:
     for name, feat in info.get("features", {}).items():
-        if any(w in name for w in words) and feat.get("dtype") in ("float32", "float64") and feat.get("shape", [0])[0] in (7, 8):
+        if (any(w in name for w in words) and isinstance(feat, dict) and feat.get("dtype") in ("float32", "float64")
+                and _shape(feat)[:1] in ([7], [8])):
             return name
     return None
 
 
-def read_lerobot(root: Path) -> list[Trajectory]:
+def _read_info(root: Path) -> dict:
     info_path = root / "meta" / "info.json"
-    info = json.loads(info_path.read_text())
+    try:
+        info = json.loads(info_path.read_text())
+    except UnicodeDecodeError:
+        raise DataError(f"{info_path}: not a text (JSON) file") from None
+    except json.JSONDecodeError as e:
+        raise DataError(f"{info_path}: not valid JSON ({e.msg} at line {e.lineno})") from None
+    if not isinstance(info, dict) or not info:
+        raise DataError(f"{info_path}: expected a JSON object with codebase_version, fps and features, "
+                        f"got {'an empty object' if isinstance(info, dict) else type(info).__name__}")
+    if not isinstance(info.get("features"), dict):
+        raise DataError(f"{info_path}: `features` must be an object mapping feature names to {{dtype, shape}}")
+    return info
+
+
+def read_lerobot(root: Path) -> list[Trajectory]:
+    info = _read_info(root)
+    info_path = root / "meta" / "info.json"
     version = str(info.get("codebase_version", "?"))
     if not version.startswith("v3"):
         raise DataError(f"{root}: LeRobot dataset version {version}; only v3.0 is supported (convert with lerobot's v2.1->v3.0 script)")
-    feats = info.get("features", {})
+    feats = info["features"]
     for key in ("observation.state", "action"):
         if key not in feats:
             raise DataError(f"{root}: LeRobot dataset lacks `{key}`; DROID convention: observation.state = 7 joint positions + gripper, action = 7 joint targets + gripper")
-        if feats[key].get("shape", [0])[0] not in (7, 8):
-            raise DataError(f"{root}: `{key}` has shape {feats[key].get('shape')}; expected 7 joints (+ gripper)")
+        if _shape(feats[key])[:1] not in ([7], [8]) or len(_shape(feats[key])) != 1:
+            raise DataError(f"{info_path}: features.{key}.shape is {_shape(feats[key]) if isinstance(feats[key], dict) else feats[key]!r}; "
+                            "expected [7] (joints) or [8] (joints + gripper)")
+    try:
+        fps = float(info.get("fps", 15))
+    except (TypeError, ValueError):
+        fps = float("nan")
+    if not np.isfinite(fps) or fps <= 0:
+        raise DataError(f"{info_path}: fps = {info.get('fps')!r}; expected a positive number of frames per second")
     files = sorted((root / "data").glob("chunk-*/*.parquet"))
     if not files:
         raise DataError(f"{root}: no parquet files under data/chunk-*/")
     import pandas as pd
 
-    df = pd.concat([pd.read_parquet(f) for f in files], ignore_index=True)
+    frames = []
+    for f in files:
+        try:
+            frames.append(pd.read_parquet(f))
+        except Exception as e:  # noqa: BLE001 - pyarrow raises many types for damaged files
+            raise DataError(f"{f}: not a readable parquet file ({type(e).__name__}); the file is damaged or truncated") from None
+    df = pd.concat(frames, ignore_index=True)
+    for col in ("episode_index", "observation.state", "action"):
+        if col not in df.columns:
+            raise DataError(f"{files[0].parent}: the parquet files have no `{col}` column (columns: {', '.join(map(str, df.columns))})")
     vel, eff = _lerobot_feature(info, ("velocit",)), _lerobot_feature(info, ("effort", "torque"))
-    fps = float(info.get("fps", 15))
     trajs = []
     for ep, g in df.groupby("episode_index", sort=True):
         g = g.sort_values("frame_index") if "frame_index" in g else g
-        state = np.stack(g["observation.state"].to_numpy())
-        action = np.stack(g["action"].to_numpy())
+        where = f"{root.name}/episode {ep}"
+        state, action = _stack(g, "observation.state", where), _stack(g, "action", where)
         t = g["timestamp"].to_numpy(dtype=np.float64) if "timestamp" in g else np.arange(len(g)) / fps
         trajs.append(Trajectory(
             f"episode_{int(ep):06d}", t, state[:, :7], action[:, :7],
-            np.stack(g[vel].to_numpy())[:, :7] if vel else None,
-            np.stack(g[eff].to_numpy())[:, :7] if eff else None,
+            _stack(g, vel, where)[:, :7] if vel and vel in g else None,
+            _stack(g, eff, where)[:, :7] if eff and eff in g else None,
             state[:, 7] if state.shape[1] > 7 else None, action[:, 7] if action.shape[1] > 7 else None, fps,
         ))
     return trajs
+
+
+def _stack(g, col: str, where: str) -> np.ndarray:
+    try:
+        a = np.stack(g[col].to_numpy()).astype(np.float64)
+    except (TypeError, ValueError):
+        raise DataError(f"{where}: column `{col}` does not hold equal-length numeric vectors") from None
+    if a.ndim != 2 or a.shape[1] < 7:
+        raise DataError(f"{where}: column `{col}` has rows of shape {a.shape[1:]}; expected 7 joints (+ gripper)")
+    return a
 
 
 def load_dir(path: str | Path, limits: np.ndarray | None = None) -> list[Trajectory]:
@@ -115,17 +179,22 @@ def load_dir(path: str | Path, limits: np.ndarray | None = None) -> list[Traject
     limits = joint_limits() if limits is None else limits
     if root.is_file() and root.suffix == ".npz":
         raw = [read_npz(root)]
+    elif root.is_file():
+        raise DataError(f"{root}: expected a directory of .npz files, one .npz file or a LeRobot v3.0 dataset directory")
     elif (root / "meta" / "info.json").exists():
         raw = read_lerobot(root)
     elif root.is_dir():
         files = sorted(root.glob("*.npz"))
+        if not files and (root / "train").is_dir() and (root / "heldout").is_dir():
+            # the layout `synth` writes: all of it (commands that split use load_split)
+            return load_dir(root / "train", limits) + load_dir(root / "heldout", limits)
         if not files:
             sub = [d.name for d in root.iterdir() if d.is_dir()]
             raise DataError(f"{root}: no .npz trajectories and no LeRobot dataset (meta/info.json) here" + (f"; subdirectories: {sub}" if sub else ""))
         raw = [read_npz(f) for f in files]
     else:
         raise DataError(f"{root}: expected a directory of .npz files or a LeRobot v3.0 dataset")
-    return [validate(tr, limits, f"{root.name}/{tr.name}") for tr in raw]
+    return [validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}") for tr in raw]
 
 
 def load_split(data: str | Path, heldout: str | Path | None = None, seed: int = 0,

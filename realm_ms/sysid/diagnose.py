@@ -22,10 +22,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from realm_ms.sysid.effects import EFFECTS, confounded_with, make_effect
+from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
 from realm_ms.sysid.optimize import Group, evaluate_groups, linearized_step
 from realm_ms.sysid.replay import SegmentSet
-from realm_ms.sysid.robot_model import RobotModel
+from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.signatures import Features, compute, noise_floor
 from realm_ms.sysid.timeseries import Trajectory
 
@@ -200,7 +200,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
         msg = (f"no missing effect found: the best candidate ({best.effect if best else '-'}) removes only "
                f"{100 * (best.score if best else 0):.0f}% of the held-out RMSE {base_he_rmse:.2e} rad "
                f"(noise floor {floor:.2e} rad)")
-    log(msg)
+    # the verdict (msg) is printed once, by the caller (CLI: on stdout)
     return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), found, suspects, feats, msg)
 
 
@@ -212,6 +212,6 @@ def _config(fx) -> dict:
 
 def _arm_model():
     from realm_ms.agents.arm_model import ArmModel
-    from realm_ms.sysid.urdf import BASE_LINK, TIP_LINK, source_urdf_path
+    from realm_ms.sysid.locked_urdf import BASE_LINK, TIP_LINK, source_urdf_path
 
     return ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)

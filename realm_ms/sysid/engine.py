@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from realm_ms.sysid.effects import Effect, make_effect
+from realm_ms.agents.effects import Effect, make_effect
 from realm_ms.sysid.replay import Scores, SegmentSet, score
 from realm_ms.sysid.simulator import SimConfig
 
@@ -54,6 +54,17 @@ def _worker_run(args):
     return _WORKER_SIM.rollout(q0, qd0, cmd, _effects_from_specs(specs))
 
 
+def make_simulator(config: SimConfig | None = None, device: str | None = None):
+    """CPU simulator (``simulator.py``), or the GPU one when ``device`` is ``cuda`` (``gpu.py``)."""
+    if device and device.startswith("cuda"):
+        from realm_ms.sysid.gpu import GpuReplaySimulator
+
+        return GpuReplaySimulator(config)
+    from realm_ms.sysid.simulator import ReplaySimulator
+
+    return ReplaySimulator(config)
+
+
 class Evaluator:
     def __init__(self, config: SimConfig | None = None, workers: int = 1, device: str | None = None,
                  max_envs: int = 1200):
@@ -83,8 +94,6 @@ class Evaluator:
     @property
     def sim(self):
         if self._sim is None:
-            from realm_ms.sysid.simulator import make_simulator
-
             self._sim = make_simulator(self.config, self.device)
             self._sim.show_progress = self.progress
         return self._sim

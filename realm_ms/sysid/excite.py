@@ -13,7 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-HOME = np.array([0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0])
+from realm_ms.agents.urdf import DROID_RESET_QPOS
+
+HOME = np.array(DROID_RESET_QPOS)
 # workspace for random hold configurations (rad), wide enough that gravity torques change sign
 CONFIG_LO = np.array([-1.2, -0.9, -1.0, -2.7, -1.2, 1.0, -1.5])
 CONFIG_HI = np.array([1.2, 0.6, 1.0, -1.0, 1.2, 3.0, 1.5])
@@ -27,6 +29,18 @@ class ExciteConfig:
     max_step: float = 0.2  # rad per control step
     margin: float = 0.15  # rad from the joint limits
     amplitude: float = 0.35  # rad, random-motion / chirp amplitude
+
+    def __post_init__(self) -> None:
+        from realm_ms.validate import InputError, check_non_negative, check_positive
+
+        self.duration_s = check_positive(self.duration_s, "duration_s (--duration)", "s")
+        if self.duration_s <= 1.0:
+            raise InputError(f"duration_s (--duration): must be > 1 s, got {self.duration_s:g}")
+        self.control_hz = check_positive(self.control_hz, "control_hz (--control-hz)", "Hz")
+        self.max_velocity = check_positive(self.max_velocity, "max_velocity (--max-velocity)", "rad/s")
+        self.max_step = check_positive(self.max_step, "max_step", "rad")
+        self.margin = check_non_negative(self.margin, "margin", "rad")
+        self.amplitude = check_non_negative(self.amplitude, "amplitude", "rad")
 
 
 def _smooth_random(rng, n, hz, amp):

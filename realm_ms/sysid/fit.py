@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from realm_ms.sysid.effects import make_effect
+from realm_ms.agents.effects import make_effect
 from realm_ms.sysid.optimize import Group, cma_fit, evaluate_groups, linearized_step
 from realm_ms.sysid.replay import SegmentSet
-from realm_ms.sysid.robot_model import RobotModel
-from realm_ms.sysid.spec import parse_effects
+from realm_ms.agents.robot_model import RobotModel
+from realm_ms.sysid.effect_spec import parse_effects
 from realm_ms.sysid.timeseries import Trajectory
 
 

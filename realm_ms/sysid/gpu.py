@@ -16,14 +16,16 @@ import numpy as np
 import torch
 
 from realm_ms.agents.actuation import ActuationModel
-from realm_ms.sysid.effects import BuildTarget, Effect
+from realm_ms.agents.effects import Effect
+from realm_ms.agents.effects.build_target import BuildTarget
 from realm_ms.sysid.simulator import SimConfig, StepProfile
 
 
 class GpuReplaySimulator:
     def __init__(self, config: SimConfig | None = None, device: str = "cuda"):
         from realm_ms.agents.arm_model import ArmModel
-        from realm_ms.sysid.urdf import BASE_LINK, TIP_LINK, locked_arm_urdf_path, source_urdf_path
+        from realm_ms.sysid.locked_urdf import (BASE_LINK, TIP_LINK, flange_offset_in_link7, locked_arm_urdf_path,
+                                                source_urdf_path)
 
         if not torch.cuda.is_available():
             raise RuntimeError("GpuReplaySimulator needs CUDA; use the CPU ReplaySimulator")
@@ -32,6 +34,7 @@ class GpuReplaySimulator:
         self.dt = 1.0 / self.config.physics_hz
         src, self.robot_name = source_urdf_path()
         self.urdf = locked_arm_urdf_path(src)
+        self._flange_offset = flange_offset_in_link7(src)  # the flange is lumped into link 7
         self.model = ArmModel.from_urdf(src, BASE_LINK, TIP_LINK)
         self.px = None
         self.arts: list = []
@@ -67,7 +70,7 @@ class GpuReplaySimulator:
             configure_arm_joints([[j] for j in art.get_active_joints()], driver)
             for link in art.get_links():
                 link.set_disable_gravity(False)
-            target = BuildTarget(art, list(range(7)))
+            target = BuildTarget(art, list(range(7)), self._flange_offset)
             for fx in build_effects:
                 fx.build_target(target, min(i, fx.theta.shape[0] - 1))
             self.arts.append(art)

@@ -16,8 +16,8 @@ from typing import Callable
 
 import numpy as np
 
-from realm_ms.sysid.effects import Effect, make_effect
-from realm_ms.sysid.parameter import Param, ParamSet
+from realm_ms.agents.effects import Effect, make_effect
+from realm_ms.agents.effects.parameter import Param, ParamSet
 from realm_ms.sysid.replay import SegmentSet, score
 
 

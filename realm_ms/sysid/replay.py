@@ -85,7 +85,13 @@ class SegmentSet:
     @classmethod
     def build(cls, trajs: list[Trajectory], physics_hz: float = 120.0, length_s: float = 5.0,
               burn_in_s: float = 1.0, snap_s: float = 0.6) -> "SegmentSet":
-        dt = 1.0 / physics_hz
+        from realm_ms.validate import check_non_negative, check_positive
+
+        # a zero, negative or NaN length would never advance the window loop below
+        dt = 1.0 / check_positive(physics_hz, "physics_hz", "Hz")
+        length_s = check_positive(length_s, "segment length (--segment)", "s")
+        burn_in_s = check_non_negative(burn_in_s, "burn-in", "s")
+        snap_s = check_non_negative(snap_s, "snap window", "s")
         segs: list[Segment] = []
         for ti, tr in enumerate(trajs):
             t = tr.t

@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from realm_ms.sysid.parameter import format_value
+from realm_ms.agents.effects.parameter import format_value
 
 
 def _corr(a: np.ndarray, b: np.ndarray) -> float:

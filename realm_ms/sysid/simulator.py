@@ -24,7 +24,8 @@ import numpy as np
 import torch
 
 from realm_ms.agents.actuation import ActuationModel
-from realm_ms.sysid.effects import BuildTarget, Effect
+from realm_ms.agents.effects import Effect
+from realm_ms.agents.effects.build_target import BuildTarget
 
 
 @dataclass
@@ -70,12 +71,14 @@ class ReplaySimulator:
         from sapien import physx
 
         from realm_ms.agents.arm_model import ArmModel
-        from realm_ms.sysid.urdf import BASE_LINK, TIP_LINK, locked_arm_urdf_path, source_urdf_path
+        from realm_ms.sysid.locked_urdf import (BASE_LINK, TIP_LINK, flange_offset_in_link7, locked_arm_urdf_path,
+                                                source_urdf_path)
 
         self.config = config or SimConfig()
         self.dt = 1.0 / self.config.physics_hz
         src, self.robot_name = source_urdf_path()
         self.urdf = locked_arm_urdf_path(src)
+        self._flange_offset = flange_offset_in_link7(src)  # the flange is lumped into link 7
         self.model = ArmModel.from_urdf(src, BASE_LINK, TIP_LINK)  # the controller's model: benchmark URDF
         self.scene = sapien.Scene([physx.PhysxCpuSystem()])
         self.scene.set_timestep(self.dt)
@@ -111,7 +114,7 @@ class ReplaySimulator:
             for link in art.get_links():
                 link.set_disable_gravity(False)
             self.arms.append(art)
-            self._targets.append(BuildTarget(art, list(range(7))))
+            self._targets.append(BuildTarget(art, list(range(7)), self._flange_offset))
 
     # ------------------------------------------------------------------ rollout
     def rollout(self, q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray, effects: list[Effect],
@@ -182,12 +185,3 @@ class ReplaySimulator:
             bad = np.where(~np.isfinite(out).all(axis=(1, 2)))[0]
             out[bad] = np.nan  # caller turns a diverged env into an infinite loss
         return out
-
-
-def make_simulator(config: SimConfig | None = None, device: str | None = None):
-    """CPU simulator, or the GPU one when ``device`` is ``cuda`` (see ``gpu.py``)."""
-    if device and device.startswith("cuda"):
-        from realm_ms.sysid.gpu import GpuReplaySimulator
-
-        return GpuReplaySimulator(config)
-    return ReplaySimulator(config)

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from realm_ms.sysid.excite import ExciteConfig, excite
-from realm_ms.sysid.robot_model import RobotModel
-from realm_ms.sysid.spec import parse_effects
+from realm_ms.agents.robot_model import RobotModel
+from realm_ms.sysid.effect_spec import parse_effects
 from realm_ms.sysid.timeseries import Trajectory
 
 

@@ -12,11 +12,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from realm_ms.validate import InputError
+
 MIN_SAMPLES = 20
 MIN_DURATION_S = 1.0
+MIN_RATE_HZ = 5.0  # slower logs cannot resolve the 15 Hz commands; a median step of 1 is frame indices
+MAX_GAP_S = 1.0  # a longer jump in `t` (and > GAP_FACTOR x the median step) is a gap in the recording
+GAP_FACTOR = 20.0
 
 
-class DataError(ValueError):
+class DataError(InputError):
     """The data cannot be used; the message says what is wrong and how to fix it."""
 
 
@@ -53,6 +58,8 @@ def _check_array(name: str, where: str, a, shape_tail: tuple[int, ...], n: int |
         a = np.asarray(a, dtype=np.float64)
     except (TypeError, ValueError):
         raise DataError(f"{where}: `{name}` is not numeric") from None
+    if a.ndim == 0:
+        raise DataError(f"{where}: `{name}` is a single number, expected an array with one row per timestamp")
     if a.ndim != 1 + len(shape_tail) or a.shape[1:] != shape_tail:
         want = "(T,)" if not shape_tail else f"(T, {', '.join(map(str, shape_tail))})"
         raise DataError(f"{where}: `{name}` has shape {a.shape}, expected {want}")
@@ -78,12 +85,37 @@ def validate(traj: Trajectory, q_limits: np.ndarray, where: str | None = None) -
         raise DataError(f"{where}: time is not strictly increasing at sample {i + 1} (t = {t[i]:.6g} -> {t[i + 1]:.6g} s); sort or de-duplicate the samples")
     if t[-1] - t[0] < MIN_DURATION_S:
         raise DataError(f"{where}: lasts {t[-1] - t[0]:.3g} s; need at least {MIN_DURATION_S:g} s")
-    if np.median(dt) > 1.0:
-        raise DataError(f"{where}: median time step {np.median(dt):.3g} s; `t` must be in seconds (milliseconds or ns?)")
+    med = float(np.median(dt))
+    if med > 1.0 / MIN_RATE_HZ:
+        if np.allclose(t, np.round(t)) and abs(med - 1.0) < 1e-9:
+            raise DataError(f"{where}: `t` looks like frame indices (0, 1, 2, ...); it must be in seconds "
+                            "(e.g. t = frame_index / fps)")
+        raise DataError(f"{where}: median time step {med:.3g} s ({1 / med:.3g} Hz) is too slow (need >= "
+                        f"{MIN_RATE_HZ:g} Hz); `t` must be in seconds (milliseconds or ns? frame indices?)")
+    gap = dt > max(MAX_GAP_S, GAP_FACTOR * med)
+    if gap.any():
+        i = int(np.argmax(gap))
+        raise DataError(f"{where}: `t` jumps by {dt[i]:.6g} s at sample {i + 1} (median step {med:.3g} s): a gap in "
+                        "the recording; split it into separate trajectories")
+    control_hz = None
+    if traj.control_hz is not None:
+        c = np.asarray(traj.control_hz)
+        if c.size != 1:
+            raise DataError(f"{where}: `control_hz` has shape {c.shape}; expected one number (Hz)")
+        if c.dtype.kind not in "fiu":
+            raise DataError(f"{where}: `control_hz` = {c.reshape(-1)[0]!r} is not a number; expected Hz (DROID: 15)")
+        control_hz = float(c.reshape(-1)[0])
+        if not np.isfinite(control_hz) or control_hz <= 0:
+            raise DataError(f"{where}: `control_hz` = {control_hz:g}; expected a positive number of Hz (DROID: 15)")
+        if 1.0 / med < 0.95 * control_hz:
+            raise DataError(f"{where}: logged at {1 / med:.3g} Hz, below its control rate control_hz = {control_hz:g} Hz; "
+                            "log at least once per command")
     q = _check_array("q", where, traj.q, (7,), n)
     q_cmd = _check_array("q_cmd", where, traj.q_cmd, (7,), n)
     qd = None if traj.qd is None else _check_array("qd", where, traj.qd, (7,), n)
     tau = None if traj.tau is None else _check_array("tau", where, traj.tau, (7,), n)
+    gripper = None if traj.gripper is None else _check_array("gripper", where, traj.gripper, (), n)
+    gripper_cmd = None if traj.gripper_cmd is None else _check_array("gripper_cmd", where, traj.gripper_cmd, (), n)
     for name, a in (("q", q), ("q_cmd", q_cmd)):
         if np.abs(a).max() > 2 * np.pi:
             raise DataError(f"{where}: `{name}` reaches {np.abs(a).max():.1f}; joint angles must be in radians (these look like degrees: multiply by pi/180)")
@@ -100,7 +132,7 @@ def validate(traj: Trajectory, q_limits: np.ndarray, where: str | None = None) -
     if out.any():
         i, j = (int(v) for v in np.argwhere(out)[0])
         raise DataError(f"{where}: measured joint {j + 1} = {q[i, j]:.4f} rad at sample {i} is outside the joint limits [{lo[j]:.4f}, {hi[j]:.4f}] rad")
-    return Trajectory(traj.name, t - t[0], q, q_cmd, qd, tau, traj.gripper, traj.gripper_cmd, traj.control_hz, dict(traj.meta))
+    return Trajectory(traj.name, t - t[0], q, q_cmd, qd, tau, gripper, gripper_cmd, control_hz, dict(traj.meta))
 
 
 def split(trajs: list[Trajectory], heldout_fraction: float = 0.3, seed: int = 0) -> tuple[list[Trajectory], list[Trajectory]]:

@@ -13,8 +13,11 @@ Episode protocol (REALM, with its pitfalls fixed):
 
 from __future__ import annotations
 
+import dataclasses
+import warnings
 from typing import Any
 
+import numpy as np
 import sapien
 import torch
 from mani_skill.envs.sapien_env import BaseEnv
@@ -25,11 +28,47 @@ from mani_skill.utils.structs.types import GPUMemoryConfig, SceneConfig, SimConf
 
 from realm_ms.agents.droid_controller import DroidControlConfig
 from realm_ms.agents.panda_droid import PandaDroid
-from realm_ms.rendering import shader_config, vertical_fov
+from realm_ms.rendering import camera_shader_config, vertical_fov
 from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
 from realm_ms.tasks.scenes import get_scene
+from realm_ms.tasks.config import RealmEnvConfig, _control_fields
 from realm_ms.tasks.spec import CameraSpec, TaskSpec
+
+def resolve_perturbations(spec):
+    """The env's perturbation set; ``realm_ms.perturbations`` installs the resolver (tasks sit below it)."""
+    if PERTURBATION_RESOLVER is None:
+        if spec in (None, 0, "Default", "default"):
+            return _NoPerturbation()
+        raise ValueError("perturbations need `import realm_ms.perturbations` (done by `import realm_ms`)")
+    return PERTURBATION_RESOLVER(spec)
+
+
+class _NoPerturbation:
+    """Stand-in when realm_ms.perturbations is not imported: Default, no hooks."""
+
+    needs_reconfigure = False
+    specs: list = []
+    override = None
+
+    def draw(self, env, env_idx, scene_changing_only=False):
+        self.specs = [env.task_spec] * env.num_envs
+
+    def camera_pose(self, uid, pose):
+        return pose
+
+    def on_episode_init(self, env, env_idx):
+        pass
+
+    def on_observation(self, env, data):
+        return data
+
+    def record(self):
+        return dict(name="Default", names=["Default"], ids=[0], params=[{} for _ in self.specs])
+
+
+PERTURBATION_RESOLVER = None  # set by realm_ms.perturbations: spec -> PerturbationSet
+
 
 class RealmEnv(BaseEnv):
     """Base of all REALM-* envs. Subclasses only set ``task_spec`` (see ``spec.register_task``)."""
@@ -39,43 +78,57 @@ class RealmEnv(BaseEnv):
     SUPPORTED_REWARD_MODES = ["sparse", "none"]
     SUPPORTED_OBS_MODES = ["state", "state_dict", "none", "sensor_data", "rgb", "rgb+depth", "rgb+segmentation", "rgbd", "depth", "segmentation"]
 
-    def __init__(
-        self,
-        *args,
-        robot_uids: str = "panda_droid",
-        scene_name: str | None = None,
-        camera_width: int = 320,
-        camera_height: int = 180,
-        shader: str = "default",
-        settle_steps: int = 5,
-        success_tail: int = 15,
-        robot_model: Any = None,  # MODEL.yaml path, dict or RobotModel from `realm sysid fit`
-        droid_control: dict | DroidControlConfig | None = None,
-        thresholds: Thresholds = Thresholds(),
-        **kwargs,
-    ):
-        self.scene_def = get_scene(scene_name or self.task_spec.scene)
-        self.camera_size = (int(camera_width), int(camera_height))
-        self.shader = shader
-        self.settle_steps = int(settle_steps)
-        self.success_tail = int(success_tail)
-        self.thresholds = thresholds
-        self.instruction = self.task_spec.instruction
+    def __init__(self, *args, config: RealmEnvConfig | None = None, robot_uids: str = "panda_droid", **kwargs):
+        """``config`` or its fields as keywords (``camera_width=``, ``shader=``, ``droid_control=``,
+        ``robot_model=``, ``perturbation=``, ... see ``RealmEnvConfig``); other keywords go to ManiSkill."""
+        config, kwargs = RealmEnvConfig.from_kwargs(config, kwargs)
         self.robot_model = None
-        if robot_model is not None:  # an identified model: its effects and the presets it was fitted on
-            from realm_ms.sysid.robot_model import load_robot_model
+        if config.robot_model is not None:  # an identified model: its effects and the presets it was fitted on
+            from realm_ms.agents.robot_model import load_robot_model
 
-            self.robot_model = load_robot_model(robot_model)
-            if not isinstance(droid_control, DroidControlConfig):
-                droid_control = dict(gains=self.robot_model.gains, joint_physics=self.robot_model.joint_physics) | (droid_control or {})
+            self.robot_model = load_robot_model(config.robot_model)
             if "sim_config" not in kwargs and int(self.robot_model.physics_hz) != 120:
                 kwargs["sim_config"] = dict(sim_freq=int(self.robot_model.physics_hz))
-        if droid_control is not None:  # e.g. dict(gains="realm", model_rate="control")
-            if robot_uids != PandaDroid.uid:
-                raise ValueError("droid_control configures the panda_droid agent only")
-            cfg = droid_control if isinstance(droid_control, DroidControlConfig) else DroidControlConfig(**droid_control)
-            robot_uids = type("PandaDroidConfigured", (PandaDroid,), {"droid_control": cfg})
+        control = config.control
+        if control is None or isinstance(control, dict):  # a model's presets, under the keywords given
+            base = dict(gains=self.robot_model.gains, joint_physics=self.robot_model.joint_physics) if self.robot_model else {}
+            control = DroidControlConfig(**_control_fields(base | (control or {})))
+        if config.control is not None and robot_uids != PandaDroid.uid:
+            raise ValueError("droid_control configures the panda_droid agent only")
+        self.config = config = dataclasses.replace(config, control=control)
+        self.scene_def = get_scene(config.scene or self.task_spec.scene)
+        self.cameras = config.cameras
+        self.settle_steps = config.settle_steps
+        self.success_tail = config.success_tail
+        self.thresholds = config.thresholds
+        self.instruction = self.task_spec.instruction
+        # --- perturbations: resolved here, drawn every reset (hooks below; logic in realm_ms.perturbations)
+        self.perturbation_spec = config.perturbation
+        self.perturbations = resolve_perturbations(config.perturbation)
+        self.active_spec = self.task_spec  # the task as perturbed in sub-env 0 (instruction, skill, objects)
+        self._pert_fresh = False
+        # ---
+        self._action_warned: set[str] = set()
+        self._contacts_dirty = False  # simulated since the last (re)build: see _forget_contacts
         super().__init__(*args, robot_uids=robot_uids, **kwargs)
+        # the full description, ManiSkill's part included: records store it, make_env re-creates the env
+        self.config = dataclasses.replace(
+            config, task=self.task_spec.env_id, obs_mode=self.obs_mode, control_mode=self.control_mode,
+            num_envs=self.num_envs, sim_backend=self.backend.sim_backend, render_mode=self.render_mode,
+        )
+
+    # kept for code that reads them: the camera settings live in ``self.cameras``
+    @property
+    def camera_size(self) -> tuple[int, int]:
+        return (self.cameras.width, self.cameras.height)
+
+    @property
+    def shader(self) -> str:
+        return self.cameras.shader
+
+    @property
+    def denoiser(self) -> str:
+        return self.cameras.denoiser
 
     # ------------------------------------------------------------------ configuration
     @property
@@ -91,9 +144,11 @@ class RealmEnv(BaseEnv):
     def _camera_config(self, cam: CameraSpec, size: tuple[int, int], shader: str) -> CameraConfig:
         w, h = size
         pose = sapien_utils.look_at(eye=list(cam.eye), target=list(cam.target))
+        if cam.uid != "render_camera":  # perturbation hook (V-VIEW): batched per sub-env extrinsics
+            pose = self.perturbations.camera_pose(cam.uid, pose)
         return CameraConfig(
             cam.uid, pose=pose, width=w, height=h, fov=vertical_fov(cam.hfov_deg, w, h), near=0.01, far=10.0,
-            shader_config=shader_config(shader),
+            shader_config=camera_shader_config(shader, self.denoiser),
         )
 
     @property
@@ -106,36 +161,61 @@ class RealmEnv(BaseEnv):
         return self._camera_config(cam, (640, 360), "default")
 
     def get_language_instruction(self) -> list[str]:
-        return [self.instruction] * self.num_envs
+        specs = self.perturbations.specs  # perturbation hook: per sub-env instruction
+        return [s.instruction for s in specs] if len(specs) == self.num_envs else [self.instruction] * self.num_envs
 
     # ------------------------------------------------------------------ loading
     def _load_agent(self, options: dict):
-        super()._load_agent(options, sapien.Pose(p=[0, 0, self.scene_def.table_top_z]))
-        self.agent.wrist_camera = (*self.camera_size, self.shader)
+        pose = sapien.Pose(p=[0, 0, self.scene_def.table_top_z])
+        if self.robot_uids != PandaDroid.uid:
+            return super()._load_agent(options, pose)
+        # built here (not by uid) so this env's control settings and cameras reach the agent
+        self.agent = PandaDroid(self.scene, self._control_freq, self._control_mode, initial_pose=pose,
+                                droid_control=self.config.control, camera=self.cameras)
         if self.robot_model is not None:
             self.agent.set_robot_model(self.robot_model.actuation())
 
     def _load_scene(self, options: dict):
         from realm_ms.tasks.objects import build_task_object
 
+        self._contacts_dirty = False  # a new PhysX scene has no contact history
         self.scene_def.build(self)
+        # --- perturbation hook: draw for every sub-env, then build each sub-env's perturbed task
+        self.perturbations.draw(self, range(self.num_envs))
+        self._pert_fresh = True
+        specs = self.perturbations.specs
+        self.active_spec = spec = specs[0]
+        self.instruction = spec.instruction
+        # ---
         self.objects = {}
-        for o in self.task_spec.objects:
-            self.objects[o.name] = build_task_object(self, o)
-        spec = self.task_spec
+        for o in spec.objects:
+            self.objects[o.name] = build_task_object(self, o, variants=[next(x for x in s.objects if x.name == o.name) for s in specs])
         self.main = self.objects[spec.main.name]
         targets = spec.by_role("target")
         self.target = self.objects[targets[0].name] if targets else None
         self.tracker = ProgressionTracker(spec.skill, self.num_envs, self.device, self.thresholds)
+        self.nominal_masses = {k: o.entity.mass.clone() for k, o in self.objects.items() if not o.is_articulated}
 
     def _load_lighting(self, options: dict):
         self.scene_def.load_lighting(self)
+        # nominal light colours per sub-scene: perturbations (V-LIGHT) scale from these, never compound
+        self.lights = [
+            [(c, tuple(float(v) for v in c.color)) for e in s.entities for c in e.components if isinstance(c, sapien.render.RenderLightComponent)]
+            for s in self.scene.sub_scenes
+        ]
 
     # ------------------------------------------------------------------ episodes
     def _initialize_episode(self, env_idx: torch.Tensor, options: dict):
         with torch.device(self.device):
             b = len(env_idx)
-            spec = self.task_spec
+            # --- perturbation hook: a reset without reconfiguration redraws the episode-level factors
+            if not self._pert_fresh:
+                self.perturbations.draw(self, env_idx, scene_changing_only=True)
+            self._pert_fresh = False
+            self.active_spec = spec = self.perturbations.specs[0]
+            self.instruction = spec.instruction
+            # ---
+            self._forget_contacts(env_idx)
             qpos = self.agent.reset_qpos(torch.as_tensor(spec.init_qpos, dtype=torch.float32).expand(b, -1))
             self.agent.reset(qpos)
             self.agent.robot.set_pose(Pose.create_from_pq(torch.tensor([0.0, 0.0, self.scene_def.table_top_z]).expand(b, 3)))
@@ -157,6 +237,7 @@ class RealmEnv(BaseEnv):
                 obj.set_pose(p, torch.as_tensor(yaw[:, k], dtype=torch.float32))
             for o in spec.by_role("fixture"):
                 self.objects[o.name].reset_fixture(env_idx, o, self.scene_def)
+            self.perturbations.on_episode_init(self, env_idx)  # perturbation hook: masses, poses, lights
             self.tracker.reset(env_idx)
             if not hasattr(self, "_settle_left"):
                 self._settle_left = torch.zeros(self.num_envs, dtype=torch.long)
@@ -166,6 +247,29 @@ class RealmEnv(BaseEnv):
                 self._openness0 = torch.zeros(self.num_envs)
             self._settle_left[env_idx] = self.settle_steps
             self._success_steps[env_idx] = 0
+            # until the settled reference exists, observe the placed pose, never the last episode's
+            placed = torch.zeros(self.num_envs, dtype=torch.bool)
+            placed[env_idx] = True
+            self._capture_reference(placed)
+
+    def _forget_contacts(self, env_idx: torch.Tensor) -> None:
+        """Drop PhysX's contact pairs before a new episode is placed.
+
+        PhysX keeps a pair's cached contact/friction patches while its shapes stay close, so an
+        object teleported onto the table where such a pair survived settles differently from the
+        same object in a fresh env (seen: 1e-2 rad of arm drift and success one step later after a
+        grasp episode). Moving every body apart and stepping once ends every pair, so an episode
+        depends only on its seed. CPU sim, whole-batch resets (a GPU step would advance the other
+        sub-envs of a partial reset); skipped when nothing has been simulated since the scene was built.
+        """
+        if not self._contacts_dirty or self.gpu_sim_enabled or len(env_idx) != self.num_envs:
+            return
+        b, far = len(env_idx), 100.0
+        for k, obj in enumerate(self.objects.values()):  # 3 m apart: no two bodies can touch
+            obj.set_pose(torch.tensor([far + 3.0 * k, far, far]).expand(b, 3), torch.zeros(b))
+        self.agent.robot.set_pose(Pose.create_from_pq(torch.tensor([-far, -far, far]).expand(b, 3)))
+        self.scene.px.step()
+        self._contacts_dirty = False
 
     def _capture_reference(self, mask: torch.Tensor) -> None:
         """Reference pose of the main object, after settling (and after any object swap)."""
@@ -203,7 +307,7 @@ class RealmEnv(BaseEnv):
         if main.is_articulated:
             x.openness, x.openness0 = main.openness, self._openness0
             x.toggled = main.toggled
-            x.extra["opening"] = self.task_spec.skill != "close_drawer"
+            x.extra["opening"] = self.active_spec.skill != "close_drawer"
         return x
 
     def evaluate(self) -> dict:
@@ -220,11 +324,69 @@ class RealmEnv(BaseEnv):
             **self.tracker.info(),
         }
 
+    # ------------------------------------------------------------------ perturbation hooks
+    def reset(self, seed=None, options=None):
+        """``options``: ``perturbation`` switches the perturbation from this reset on,
+        ``perturbation_params`` replays a recorded ``info["perturbation"]["params"]``."""
+        options = dict(options or {})
+        was = self.perturbations.needs_reconfigure
+        if "perturbation" in options:
+            self.perturbation_spec = options["perturbation"]
+            self.perturbations = resolve_perturbations(options["perturbation"])
+            options["reconfigure"] = True  # back to (or away from) the pristine scene
+        self.perturbations.override = options.get("perturbation_params")
+        if self.perturbations.needs_reconfigure or (was and not self.perturbations.needs_reconfigure and "perturbation" in options):
+            options["reconfigure"] = True  # scene-changing draws rebuild the scene every reset
+        self._pert_fresh = False
+        obs, info = super().reset(seed=seed, options=options)
+        self.perturbations.override = None
+        info["perturbation"] = self.perturbations.record()
+        return obs, info
+
+    def _get_obs_sensor_data(self, apply_texture_transforms: bool = True) -> dict:
+        return self.perturbations.on_observation(self, super()._get_obs_sensor_data(apply_texture_transforms))
+
     def step(self, action):
-        obs, reward, _, truncated, info = super().step(action)
+        obs, reward, _, truncated, info = super().step(self._checked_action(action))
+        self._contacts_dirty = True
         self._success_steps = torch.where(info["success"], self._success_steps + 1, 0)
         terminated = self._success_steps > self.success_tail
         return obs, reward, terminated, truncated, info
+
+    def _checked_action(self, action):
+        """Validate an action before ManiSkill sees it.
+
+        Rejected (``ValueError``): a shape other than (action_dim,) or (num_envs, action_dim), NaN or
+        Inf, anything not numeric. Clipped to the action space with one warning per env and kind:
+        joint targets beyond the joint limits, a gripper command outside [0, 1] (the robot cannot do
+        more; a policy's small overshoot is normal).
+        """
+        if action is None or isinstance(action, dict):
+            return action
+        space = self.single_action_space
+        try:
+            a = torch.as_tensor(np.asarray(action, dtype=np.float32) if not isinstance(action, torch.Tensor) else action,
+                                dtype=torch.float32, device=self.device)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"action must be numeric with shape {space.shape} or ({self.num_envs}, {space.shape[0]}): {e}") from None
+        if a.shape not in (tuple(space.shape), (self.num_envs, *space.shape)):
+            raise ValueError(f"action has shape {tuple(a.shape)}; expected {tuple(space.shape)} or "
+                             f"({self.num_envs}, {space.shape[0]}) for control mode {self.control_mode!r}")
+        if not torch.isfinite(a).all():
+            raise ValueError(f"action contains NaN or Inf: {a.tolist()}")
+        lo = torch.as_tensor(space.low, device=a.device)
+        hi = torch.as_tensor(space.high, device=a.device)
+        outside = (a < lo) | (a > hi)
+        if outside.any():
+            dims = sorted(set(torch.nonzero(outside)[:, -1].tolist()))
+            key = ",".join(map(str, dims))
+            if key not in self._action_warned:
+                self._action_warned.add(key)
+                warnings.warn(f"action dims {dims} outside the action space [{space.low[dims]}, {space.high[dims]}] "
+                              f"(joint limits in rad; gripper in [0, 1]) are clipped; this warning is shown once",
+                              RuntimeWarning, stacklevel=3)
+            a = torch.maximum(torch.minimum(a, hi), lo)
+        return a
 
     def stalled_stage(self) -> list[str]:
         return self.tracker.stalled_stage()

@@ -67,19 +67,42 @@ class TaskObject:
 
 
 class RigidTaskObject(TaskObject):
-    def __init__(self, env, spec: SceneObject):
+    """A catalog object; ``variants`` (one ``SceneObject`` per sub-env, same name) lets each sub-env
+    hold a different asset / scale (perturbations): then one actor per sub-env is built with
+    ``scene_idxs`` and merged, so poses and rubric checks stay batched."""
+
+    def __init__(self, env, spec: SceneObject, variants: list[SceneObject] | None = None):
+        from mani_skill.utils.structs.actor import Actor
+
         from realm_ms.assets import build_actor, get_object_spec
 
-        self.asset = get_object_spec(spec.asset)
+        variants = list(variants) if variants and len(variants) == env.num_envs else [spec]
+        uniform = all(v.asset == variants[0].asset and tuple(v.scale) == tuple(variants[0].scale) for v in variants)
+        if uniform:
+            variants = variants[:1]
+        self.assets = [get_object_spec(v.asset) for v in variants]
+        self.asset = self.assets[0]
+        scales = [np.broadcast_to(np.asarray(v.scale, float), (3,)) for v in variants]
+        self.fixed = spec.fixed
         body = "kinematic" if spec.fixed else "dynamic"
-        self.entity = build_actor(env.scene, self.asset, spec.name, body_type=body, pose=sapien.Pose(p=[0, 0, -5]))
-        ext = self.asset.extents
-        self.extents = ext
-        self.footprint_radius = float(np.hypot(ext[0], ext[1]) / 2)
+        hidden = sapien.Pose(p=[0, 0, -5])
+        if uniform:
+            self.entity = build_actor(env.scene, self.asset, spec.name, body_type=body, pose=hidden, scale=scales[0])
+        else:
+            parts = [
+                build_actor(env.scene, a, f"{spec.name}-{i}", body_type=body, pose=hidden, scale=s, scene_idxs=[i])
+                for i, (a, s) in enumerate(zip(self.assets, scales))
+            ]
+            self.entity = Actor.merge(parts, name=spec.name)
+        ext = np.stack([a.extents * s for a, s in zip(self.assets, scales)])  # (1 or B, 3)
+        self.extents = ext[0]  # sub-env 0 (scripted code reading one env)
+        self._extents = torch.as_tensor(ext, dtype=torch.float32, device=env.device)
+        self.footprint_radius = float(np.max(np.hypot(ext[:, 0], ext[:, 1])) / 2)
         self.rest_height = 0.002  # origin at the bottom centre; 2 mm drop avoids initial penetration
         self.device = env.device
         # bounding-box centre in the object frame (the catalog origin is the bottom centre)
-        self._centre = torch.tensor([0.0, 0.0, float(ext[2]) / 2], device=env.device)
+        self._centre = torch.zeros_like(self._extents)
+        self._centre[:, 2] = self._extents[:, 2] / 2
 
     @property
     def pose(self) -> Pose:
@@ -87,6 +110,10 @@ class RigidTaskObject(TaskObject):
 
     def set_pose(self, p: torch.Tensor, yaw: torch.Tensor) -> None:
         self.entity.set_pose(Pose.create_from_pq(p.to(self.device), yaw_quat(yaw).to(self.device)))
+        if not self.fixed:  # a teleported body keeps its velocity: the last episode's throw must not leak
+            zero = torch.zeros(p.shape[0], 3, device=self.device)
+            self.entity.set_linear_velocity(zero)
+            self.entity.set_angular_velocity(zero)
 
     def anchor_pos(self) -> torch.Tensor:
         pose = self.entity.pose
@@ -99,16 +126,16 @@ class RigidTaskObject(TaskObject):
     def contains(self, other: "TaskObject", margin: float = 0.01) -> torch.Tensor:
         """``other``'s centre inside this object's upright footprint and below its rim."""
         local = self._to_local(other.anchor_pos())
-        half = torch.as_tensor(self.extents[:2] / 2, device=local.device, dtype=local.dtype) - margin
+        half = self._extents[:, :2].to(local) / 2 - margin
         inside_xy = (local[:, :2].abs() < half).all(dim=1)
-        return inside_xy & (local[:, 2] > -0.01) & (local[:, 2] < float(self.extents[2]) + 0.02)
+        return inside_xy & (local[:, 2] > -0.01) & (local[:, 2] < self._extents[:, 2].to(local) + 0.02)
 
     def supports(self, other: "TaskObject", scene, tol: float = 0.015) -> torch.Tensor:
         """``other`` rests on this object's top face: footprint, bottom at the top height, contact."""
         local = self._to_local(other.pose.p)  # other's bottom centre
-        half = torch.as_tensor(self.extents[:2] / 2, device=local.device, dtype=local.dtype)
+        half = self._extents[:, :2].to(local) / 2
         on_xy = (local[:, :2].abs() < half).all(dim=1)
-        on_z = (local[:, 2] - float(self.extents[2])).abs() < tol
+        on_z = (local[:, 2] - self._extents[:, 2].to(local)).abs() < tol
         touching = any_contact(scene, [self.entity], [other.entity])
         return on_xy & on_z & touching
 
@@ -118,9 +145,11 @@ class RigidTaskObject(TaskObject):
         return ((p_world - pose.p)[:, None, :] @ r)[:, 0, :]
 
 
-def build_task_object(env, spec: SceneObject) -> TaskObject:
+def build_task_object(env, spec: SceneObject, variants: list[SceneObject] | None = None) -> TaskObject:
+    """``variants``: the object as each sub-env's (perturbed) task has it; articulated objects are
+    built from sub-env 0's variant for all sub-envs (their geometry is one articulation layout)."""
     prefix = spec.asset.split("/", 1)[0]
     builder = OBJECT_BUILDERS.get(prefix)
     if builder is not None:
-        return builder(env, spec)
-    return RigidTaskObject(env, spec)
+        return builder(env, variants[0] if variants else spec)
+    return RigidTaskObject(env, spec, variants)

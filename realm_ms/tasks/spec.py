@@ -10,8 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-# DROID's reset pose; REALM's fallback for tasks without their own
-DROID_RESET_QPOS = (0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0)
+from realm_ms.agents.urdf import DROID_RESET_QPOS
+
 
 
 @dataclass(frozen=True)
@@ -30,6 +30,7 @@ class SceneObject:
     yaw: tuple[float, float] = (-np.pi, np.pi)  # uniform yaw range (rad)
     pose: tuple[float, ...] | None = None  # fixtures: x, y, z, yaw
     fixed: bool = False  # kinematic (e.g. a cabinet bolted to the wall)
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)  # per-axis scale of the asset (perturbations: VB-MOBJ, V-SC)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from realm_ms.sysid.parameter import format_value
+from realm_ms.agents.effects.parameter import format_value
 from realm_ms.sysid.report.figures import new, to_img
 from realm_ms.sysid.report.html import esc, table
 

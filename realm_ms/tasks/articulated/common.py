@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
 import sapien
 import torch
 from mani_skill.utils.structs.pose import Pose
@@ -58,7 +57,3 @@ class ArticulatedTaskObject(TaskObject):
 
     def supports(self, other, scene, tol: float = 0.015) -> torch.Tensor:
         return torch.zeros(self.env.num_envs, dtype=torch.bool, device=self.device)
-
-
-def np3(*v) -> np.ndarray:
-    return np.asarray(v, float)

@@ -53,21 +53,45 @@ class CabinetGeometry:
         return t + k * (h + t) + h / 2
 
 
+# carcass / front / handle colours selectable with ``?look=k`` (perturbations: other cabinet models)
+LOOKS = (
+    ((0.93, 0.91, 0.86, 1.0), (0.62, 0.45, 0.30, 1.0), (0.75, 0.75, 0.78, 1.0)),
+    ((0.30, 0.22, 0.15, 1.0), (0.85, 0.82, 0.75, 1.0), (0.20, 0.20, 0.20, 1.0)),
+    ((0.60, 0.68, 0.72, 1.0), (0.92, 0.92, 0.94, 1.0), (0.85, 0.65, 0.25, 1.0)),
+    ((0.85, 0.85, 0.85, 1.0), (0.35, 0.50, 0.40, 1.0), (0.90, 0.90, 0.92, 1.0)),
+)
+DRAWER_NAMES = {"bottom": 0, "middle": 1, "top": 2}
+
+
+def scaled_geometry(g: CabinetGeometry, sx=1.0, sy=1.0, sz=1.0, look=0) -> CabinetGeometry:
+    """Another cabinet model: carcass scaled per axis (travel follows the depth), colours from ``LOOKS``."""
+    from dataclasses import replace
+
+    body, front, handle = LOOKS[int(look) % len(LOOKS)]
+    depth = g.depth * float(sx)
+    return replace(g, depth=depth, width=g.width * float(sy), height=g.height * float(sz), travel=min(g.travel, 0.75 * depth),
+                   handle_length=min(g.handle_length, 0.6 * g.width * float(sy)), body_rgba=body, front_rgba=front, handle_rgba=handle)
+
+
 class DrawerCabinet(ArticulatedTaskObject):
-    def __init__(self, env, spec, open: str | float = 0.0, damping: str | float | None = None, geometry: CabinetGeometry | None = None):
+    def __init__(self, env, spec, open: str | float = 0.0, damping: str | float | None = None, geometry: CabinetGeometry | None = None,
+                 sx: float = 1.0, sy: float = 1.0, sz: float = 1.0, look: int = 0, drawer: str = "top"):
         super().__init__(env)
         g = geometry or CabinetGeometry()
         if damping is not None:
             from dataclasses import replace
 
             g = replace(g, damping=float(damping))
+        if (float(sx), float(sy), float(sz), int(look)) != (1.0, 1.0, 1.0, 0):
+            g = scaled_geometry(g, sx, sy, sz, look)
         self.geom = g
+        self.target_index = DRAWER_NAMES[drawer] if drawer in DRAWER_NAMES else int(drawer)  # the task's drawer
         self.init_open = float(open)
         self.footprint_radius = float(np.hypot(g.depth + 2 * g.handle_standoff, g.width) / 2)
         self.art = self._build(env.scene, spec.name)
         self.drawers = [self.art.links_map[f"drawer_{k}"] for k in range(g.n_drawers)]
         self.joints = [self.art.joints_map[f"drawer_{k}_joint"] for k in range(g.n_drawers)]
-        self.top = self.drawers[-1]
+        self.top = self.drawers[self.target_index]  # the task's drawer ("top" in REALM's instruction)
         self._handle_local = torch.tensor([-g.handle_standoff, 0.0, 0.0], device=self.device)
 
     # ---------------------------------------------------------------- building
@@ -122,10 +146,10 @@ class DrawerCabinet(ArticulatedTaskObject):
 
     # ---------------------------------------------------------------- state
     def _qpos_top(self) -> torch.Tensor:
-        return self.art.get_qpos()[:, -1]
+        return self.art.get_qpos()[:, self.target_index]
 
     def openness(self) -> torch.Tensor:
-        lim = self.art.get_qlimits()[:, -1]  # (B, 2)
+        lim = self.art.get_qlimits()[:, self.target_index]  # (B, 2)
         return ((self._qpos_top() - lim[:, 0]) / (lim[:, 1] - lim[:, 0])).clamp(0.0, 1.0)
 
     def handle_pos(self) -> torch.Tensor:
@@ -142,7 +166,7 @@ class DrawerCabinet(ArticulatedTaskObject):
     def reset_joints(self, b: int) -> None:
         n = self.geom.n_drawers
         q = torch.zeros(b, n, device=self.device)
-        q[:, -1] = self.init_open * self.geom.travel
+        q[:, self.target_index] = self.init_open * self.geom.travel
         self.art.set_qpos(q)
         self.art.set_qvel(torch.zeros_like(q))
 

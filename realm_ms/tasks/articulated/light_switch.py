@@ -40,12 +40,38 @@ class SwitchGeometry:
     on_rgba: tuple = (0.95, 0.45, 0.10, 1.0)
 
 
+# colour schemes (base, rocker, on-stripe) selectable with ``?look=k`` (perturbations: other switch models)
+LOOKS = (
+    ((0.92, 0.92, 0.90, 1.0), (0.97, 0.97, 0.97, 1.0), (0.95, 0.45, 0.10, 1.0)),
+    ((0.15, 0.15, 0.16, 1.0), (0.25, 0.25, 0.27, 1.0), (0.10, 0.75, 0.25, 1.0)),
+    ((0.80, 0.70, 0.55, 1.0), (0.85, 0.20, 0.15, 1.0), (0.98, 0.95, 0.85, 1.0)),
+    ((0.55, 0.60, 0.68, 1.0), (0.90, 0.92, 0.95, 1.0), (0.15, 0.40, 0.90, 1.0)),
+)
+
+
+def scaled_geometry(g: SwitchGeometry, sx=1.0, sy=1.0, sz=1.0, look=0) -> SwitchGeometry:
+    """Another switch model: housing / rocker scaled per axis, colours from ``LOOKS``."""
+    from dataclasses import replace
+
+    s = (float(sx), float(sy), float(sz))
+    base, rocker, on = LOOKS[int(look) % len(LOOKS)]
+    return replace(
+        g, base_half=tuple(h * k for h, k in zip(g.base_half, s)), rocker_half=tuple(h * k for h, k in zip(g.rocker_half, s)),
+        pivot_height=g.pivot_height * s[2], base_rgba=base, rocker_rgba=rocker, on_rgba=on,
+        rocker_density=g.rocker_density / (s[0] * s[1] * s[2]) ** 0.5,  # keep the detent torque in range
+    )
+
+
 class LightSwitch(ArticulatedTaskObject):
-    def __init__(self, env, spec, on: str | int = 0, geometry: SwitchGeometry | None = None):
+    def __init__(self, env, spec, on: str | int = 0, geometry: SwitchGeometry | None = None,
+                 sx: float = 1.0, sy: float = 1.0, sz: float = 1.0, look: int = 0, goal: str = "on"):
         super().__init__(env)
         g = geometry or SwitchGeometry()
+        if (float(sx), float(sy), float(sz), int(look)) != (1.0, 1.0, 1.0, 0):
+            g = scaled_geometry(g, sx, sy, sz, look)
         self.geom = g
         self.init_on = bool(int(on))
+        self.goal_on = goal != "off"  # "off": the task is to turn it off (toggled() = reached the off side)
         self.footprint_radius = float(np.hypot(g.base_half[0], g.base_half[1]))
         self.art = self._build(env.scene, spec.name)
         self.rocker = self.art.links_map["rocker"]
@@ -86,7 +112,9 @@ class LightSwitch(ArticulatedTaskObject):
         return self.art.get_qpos()[:, 0]
 
     def toggled(self) -> torch.Tensor:
-        return self.angle() > self.geom.on_threshold
+        """The switch has reached the task's goal state (on, or off with ``?goal=off``)."""
+        a = self.angle()
+        return a > self.geom.on_threshold if self.goal_on else a < -self.geom.on_threshold
 
     def anchor_pos(self) -> torch.Tensor:
         """Centre of the rocker plate."""
@@ -97,7 +125,8 @@ class LightSwitch(ArticulatedTaskObject):
         """Where to press (in the housing frame) to turn it on: the raised +x end of the rocker top."""
         g = self.geom
         x = g.rocker_half[0] * 0.7
-        return (x, 0.0, 2 * g.base_half[2] + g.pivot_height + g.rocker_half[2] + x * np.sin(g.tilt))
+        z = 2 * g.base_half[2] + g.pivot_height + g.rocker_half[2] + x * np.sin(g.tilt)
+        return (x if self.goal_on else -x, 0.0, z)
 
     def touch_entities(self) -> list:
         return [self.rocker]

@@ -16,6 +16,20 @@ def register_scene(scene: "TabletopScene") -> "TabletopScene":
     return scene
 
 
+def add_lights(env, table_top_z, ambient, sun_dir, sun_rgb, fill_rgb, lamps) -> None:
+    """Ambient + a shadow-casting sun + a fill light + point lamps ``(x, y, z above table, r, g, b)``,
+    all scaled by ``realm_ms.rendering.light_gain(env.shader)`` (rt/raster exposure balance)."""
+    from realm_ms.rendering import light_gain
+
+    g = light_gain(getattr(env, "shader", "default"))
+    s = env.scene
+    s.set_ambient_light([g * c for c in ambient])
+    s.add_directional_light(list(sun_dir), [g * c for c in sun_rgb], shadow=env.enable_shadow, shadow_scale=3, shadow_map_size=2048)
+    s.add_directional_light([-0.5, -0.2, -1.0], [g * c for c in fill_rgb])
+    for x, y, z, r, gr, b in lamps:
+        s.add_point_light([x, y, table_top_z + z], [g * r, g * gr, g * b])
+
+
 def material(rgba, roughness: float = 0.7, metallic: float = 0.0) -> sapien.render.RenderMaterial:
     return sapien.render.RenderMaterial(base_color=list(rgba), roughness=roughness, metallic=metallic)
 

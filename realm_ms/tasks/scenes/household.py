@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import sapien
 
-from realm_ms.tasks.scenes.base import TabletopScene, add_box, material, register_scene
+from realm_ms.tasks.scenes.base import TabletopScene, add_box, add_lights, material, register_scene
 from realm_ms.tasks.scenes import textures as tx
 
 
@@ -175,12 +175,7 @@ class HouseholdScene(TabletopScene):
 
     # ------------------------------------------------------------------ lighting
     def load_lighting(self, env) -> None:
-        s = env.scene
-        s.set_ambient_light(list(self.ambient))
-        s.add_directional_light(list(self.sun_dir), list(self.sun_rgb), shadow=env.enable_shadow, shadow_scale=3, shadow_map_size=2048)
-        s.add_directional_light([-0.5, -0.2, -1.0], [0.25, 0.25, 0.27])
-        for x, y, z, r, g, bl in self.lamps:
-            s.add_point_light([x, y, self.table_top_z + z], [r, g, bl])
+        add_lights(env, self.table_top_z, self.ambient, self.sun_dir, self.sun_rgb, (0.25, 0.25, 0.27), self.lamps)
 
 
 KITCHEN = register_scene(HouseholdScene(

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import sapien
 
-from realm_ms.tasks.scenes.base import TabletopScene, add_box, material, register_scene
+from realm_ms.tasks.scenes.base import TabletopScene, add_box, add_lights, material, register_scene
 
 
 @dataclass(frozen=True)
@@ -36,11 +36,7 @@ class Studio(TabletopScene):
         b.build_static(name="scene_static")
 
     def load_lighting(self, env) -> None:
-        s = env.scene
-        s.set_ambient_light([0.35, 0.35, 0.35])
-        s.add_directional_light([0.3, 0.4, -1.0], [0.9, 0.87, 0.82], shadow=env.enable_shadow, shadow_scale=3, shadow_map_size=2048)
-        s.add_directional_light([-0.5, -0.2, -1.0], [0.3, 0.3, 0.32])
-        s.add_point_light([0.6, 0.0, self.table_top_z + 1.6], [1.2, 1.1, 1.0])
+        add_lights(env, self.table_top_z, (0.35, 0.35, 0.35), (0.3, 0.4, -1.0), (0.9, 0.87, 0.82), (0.3, 0.3, 0.32), ((0.6, 0.0, 1.6, 1.2, 1.1, 1.0),))
 
 
 register_scene(Studio("studio"))

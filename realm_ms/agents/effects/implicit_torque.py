@@ -1,0 +1,80 @@
+"""Semi-implicit integration of friction-like joint torques (the base of Coulomb, Stribeck and
+viscous friction): stable at 120 Hz on the light wrist joints where an explicit law explodes."""
+
+from __future__ import annotations
+
+import torch
+
+from realm_ms.agents.actuation import ControlState
+from realm_ms.agents.effects.effect import Effect
+from realm_ms.agents.effects.model_terms import model_bias, scatter_rows
+
+
+class ImplicitJointTorque(Effect):
+    """Base of friction-like effects that must stay stable at 120 Hz on light wrist joints.
+
+    An explicit friction torque -F tanh(qd/eps) with eps small is a stiff damper (h F / (eps I) >> 2
+    on joint 7, I ~ 5e-3 kg.m^2) and explodes. These effects are integrated *semi-implicitly* per
+    joint with the joint's apparent inertia I_j = 1/(M^-1)_jj: the velocity the joint would reach
+    this step without the effect is v_free = qd + h (tau_motor - b_model(q, qd)) / I_j, and the
+    effect's torque is computed from v_free (Karnopp stick-slip for dry friction, backward Euler
+    for viscous damping). I_j is evaluated at the configuration of each reset (a few percent error
+    along a segment only softens the stick phase, it never destabilises it: a 0.8 safety factor
+    keeps the deadbeat stop from overshooting).
+    """
+
+    order = 90
+    SAFETY = 0.8
+
+    def reset(self, num_envs, device, env_idx, q):
+        self._num_envs = num_envs
+        if env_idx is None or getattr(self, "_inertia", None) is None or self._inertia.shape[0] != num_envs:
+            self._inertia = None
+        else:
+            self._stale[env_idx] = True
+
+    def _joint_inertia(self, state: ControlState) -> torch.Tensor:
+        """SAFETY / (M^-1)_jj for every env (rows where the effect is off keep a placeholder 1)."""
+        rows = self.active_rows(state.q.device)
+        if getattr(self, "_inertia", None) is None or self._inertia.shape[0] != state.q.shape[0]:
+            self._inertia = torch.ones_like(state.q)
+            self._stale = torch.ones(state.q.shape[0], dtype=torch.bool, device=state.q.device)
+        need = self._stale.clone()
+        if rows is not None:
+            mask = torch.zeros_like(need)
+            mask[rows] = True
+            need &= mask
+        if bool(need.any()):
+            idx = torch.nonzero(need)[:, 0]
+            minv = torch.linalg.inv(state.model.mass_matrix(state.q[idx]))
+            self._inertia[idx] = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
+            self._stale[idx] = False
+        return self._inertia
+
+    def actuator(self, tau, state):
+        state.extra["tau_motor"] = tau
+        return tau
+
+    def free_velocity(self, state: ControlState, rows: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """(v_free, I_j) on ``rows``: the velocity this step would end with without this effect."""
+        inertia = self._joint_inertia(state)
+        qd = state.qd
+        if rows is not None:
+            inertia, qd = inertia[rows], qd[rows]
+        tau = state.extra.get("tau_motor")
+        if tau is None:
+            return qd, inertia
+        if rows is not None:
+            tau = tau[rows]
+        net = tau - model_bias(state, rows)
+        return qd + state.dt * net / inertia, inertia
+
+    def plant_torque(self, state):
+        rows = self.active_rows(state.q.device)
+        if rows is not None and rows.numel() == 0:
+            return None
+        v_free, inertia = self.free_velocity(state, rows)
+        return scatter_rows(state.q, rows, self.friction_torque(v_free, inertia, state, rows))
+
+    def friction_torque(self, v_free, inertia, state, rows) -> torch.Tensor:
+        raise NotImplementedError

@@ -1,0 +1,175 @@
+"""Robot model files (``MODEL.yaml``): which effects, their parameters, and provenance.
+
+Format (documented in ``docs/sysid.md``)::
+
+    realm_ms_robot_model: 1
+    gains: polymetis            # DROID gain preset the model was identified with
+    joint_physics: none         # PhysX joint friction/armature preset underneath the effects
+    physics_hz: 120
+    effects:
+      - name: coulomb_friction
+        config: {asymmetric: false}
+        params: {fc1: 0.12, ..., fc7: 0.31, fc_asym1: 0.0, ...}
+        units: {fc: N·m, fc_asym: N·m}
+    provenance: {data: ..., created: ..., realm_ms: ..., sapien: ...}
+
+``load_actuation_model(path_or_dict)`` returns the :class:`ActuationModel` the benchmark controller
+installs with ``set_robot_model`` (light imports: torch + yaml). The sysid workbench writes these
+files; the benchmark reads them, so the format lives here, below both.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from realm_ms.agents.actuation import ActuationModel
+from realm_ms.agents.effects import Effect, effect_class, make_effect
+
+FORMAT_VERSION = 1
+#: the benchmark's policy rate; physics must run a whole number of steps per control step
+CONTROL_HZ = 15
+
+
+def check_physics_hz(value: Any, where: str = "physics_hz") -> float:
+    """A physics rate in Hz: a finite positive multiple of the 15 Hz control rate (e.g. 120)."""
+    try:
+        hz = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: expected a number in Hz, got {value!r}") from None
+    if not math.isfinite(hz) or hz <= 0:
+        raise ValueError(f"{where}: must be a positive number of Hz, got {value!r}")
+    steps = hz / CONTROL_HZ
+    if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
+        raise ValueError(f"{where}: {hz:g} Hz is not a whole multiple of the {CONTROL_HZ} Hz control rate "
+                         f"(e.g. 120, 240, 480)")
+    return hz
+
+
+@dataclass
+class RobotModel:
+    effects: list[Effect] = field(default_factory=list)
+    gains: str = "polymetis"
+    joint_physics: str = "none"
+    physics_hz: float = 120.0
+    provenance: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.physics_hz = check_physics_hz(self.physics_hz)
+
+    def actuation(self) -> ActuationModel:
+        """Stages in canonical order (measure/command first, friction last)."""
+        return ActuationModel(sorted(self.effects, key=lambda e: e.order))
+
+    @property
+    def names(self) -> list[str]:
+        return [e.name for e in self.effects]
+
+    def effect(self, name: str) -> Effect | None:
+        return next((e for e in self.effects if e.name == name), None)
+
+    def params(self) -> dict[str, float]:
+        return {f"{e.name}.{k}": v for e in self.effects for k, v in e.values().items()}
+
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        return {
+            "realm_ms_robot_model": FORMAT_VERSION,
+            "gains": self.gains,
+            "joint_physics": self.joint_physics,
+            "physics_hz": float(self.physics_hz),
+            "effects": [
+                {
+                    "name": e.name,
+                    "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(e.config).items()},
+                    "params": {k: round(v, 9) for k, v in e.values().items()},
+                    "units": {s.name: s.unit for s in e.specs},
+                }
+                for e in self.effects
+            ],
+            "provenance": dict(self.provenance),
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], where: str = "robot model") -> "RobotModel":
+        """Parse and validate; every problem is a one-line ``ValueError`` naming ``where`` and the field."""
+        if not isinstance(data, dict):
+            raise ValueError(f"{where}: expected a mapping at the top level, got {type(data).__name__}")
+        version = data.get("realm_ms_robot_model", FORMAT_VERSION)
+        if version != FORMAT_VERSION:
+            raise ValueError(f"{where}: format version {version} not supported (expected {FORMAT_VERSION})")
+        items = data.get("effects") or []
+        if not isinstance(items, list):
+            raise ValueError(f"{where}: effects: expected a list of effects (e.g. `effects: [{items}]`), "
+                             f"got {type(items).__name__} {items!r}")
+        effects = []
+        for i, item in enumerate(items):
+            if isinstance(item, str):
+                item = {"name": item}
+            if not isinstance(item, dict) or "name" not in item:
+                raise ValueError(f"{where}: effects[{i}]: expected a name or a mapping with 'name', got {item!r}")
+            for key in ("params", "config"):
+                if item.get(key) is not None and not isinstance(item[key], dict):
+                    raise ValueError(f"{where}: effects[{i}].{key}: expected a mapping, got {item[key]!r}")
+            try:
+                effect_class(item["name"])
+                effects.append(make_effect(item["name"], item.get("params") or {}, item.get("config") or {}))
+            except (KeyError, ValueError, TypeError) as e:
+                msg = e.args[0] if isinstance(e, KeyError) and e.args else e
+                raise ValueError(f"{where}: effects[{i}]: {msg}") from None
+        return cls(
+            effects,
+            gains=str(data.get("gains", "polymetis")),
+            joint_physics=str(data.get("joint_physics", "none")),
+            physics_hz=check_physics_hz(data.get("physics_hz", 120.0), f"{where}: physics_hz"),
+            provenance=dict(data.get("provenance") or {}),
+        )
+
+    def save(self, path: str | Path) -> None:
+        import yaml
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        tmp.write_text(yaml.safe_dump(self.to_dict(), sort_keys=False, allow_unicode=True))
+        tmp.replace(path)
+
+    @classmethod
+    def load(cls, path_or_dict: str | Path | dict | "RobotModel" | None) -> "RobotModel":
+        if path_or_dict is None:
+            return cls()
+        if isinstance(path_or_dict, RobotModel):
+            return path_or_dict
+        if isinstance(path_or_dict, dict):
+            return cls.from_dict(path_or_dict)
+        import yaml
+
+        path = Path(path_or_dict)
+        if not path.is_file():
+            raise FileNotFoundError(f"robot model {path} not found" + (" (it is a directory)" if path.is_dir() else ""))
+        try:
+            data = yaml.safe_load(path.read_text())
+        except UnicodeDecodeError:
+            raise ValueError(f"{path}: not a text (YAML) file") from None
+        except yaml.YAMLError as e:
+            first = str(e).strip().splitlines()[0] if str(e).strip() else "syntax error"
+            raise ValueError(f"{path}: not valid YAML ({first})") from None
+        return cls.from_dict(data, str(path))
+
+    def copy(self) -> "RobotModel":
+        return RobotModel.from_dict(self.to_dict())
+
+
+def load_robot_model(path_or_dict) -> RobotModel:
+    return RobotModel.load(path_or_dict)
+
+
+def load_actuation_model(path_or_dict) -> ActuationModel:
+    """The benchmark's entry point: ``controller.set_robot_model(load_actuation_model("MODEL.yaml"))``
+    then ``actuation.build(articulation, joint_indices)`` once the articulation is loaded (armature,
+    payload). Use the file's ``gains`` and ``joint_physics`` presets for the controller too
+    (``load_robot_model(path).gains`` / ``.joint_physics``)."""
+    return RobotModel.load(path_or_dict).actuation()

@@ -1,0 +1,69 @@
+"""A minimal openpi-protocol websocket server (in-process, threaded): for tests and for serving any
+callable ``infer(obs: dict) -> dict`` to openpi clients (same handshake and framing as openpi's
+``WebsocketPolicyServer``: metadata first, one binary reply per request, errors as a text frame)."""
+
+from __future__ import annotations
+
+import threading
+import traceback
+from collections.abc import Callable
+
+from realm_ms.eval.policies.openpi_wire import packb, unpackb
+
+
+class OpenPIServer:
+    def __init__(self, infer: Callable[[dict], dict], host: str = "127.0.0.1", port: int = 0, metadata: dict | None = None):
+        self.infer, self.host, self.port, self.metadata = infer, host, port, metadata or {}
+        self.requests = 0
+        self._server = None
+        self._thread = None
+
+    def _handle(self, ws) -> None:
+        ws.send(packb(self.metadata))
+        while True:
+            try:
+                msg = ws.recv()
+            except Exception:
+                return  # client went away
+            try:
+                reply = self.infer(unpackb(msg))
+                self.requests += 1
+                ws.send(packb(reply))
+            except Exception:
+                ws.send(traceback.format_exc())
+                ws.close()
+                return
+
+    def start(self) -> "OpenPIServer":
+        from websockets.sync.server import serve
+
+        self._server = serve(self._handle, self.host, self.port, compression=None, max_size=None)
+        self.port = self._server.socket.getsockname()[1]
+        self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
+        self._thread.start()
+        return self
+
+    @property
+    def address(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    def stop(self) -> None:
+        if self._server is not None:
+            self._server.shutdown()
+            self._thread.join(timeout=5)
+            self._server = None
+
+    def __enter__(self):
+        return self.start()
+
+    def __exit__(self, *exc):
+        self.stop()
+
+
+def hold_infer(obs: dict, horizon: int = 10) -> dict:
+    """A pi0-format server body that answers "hold the current joints, open gripper" (tests, smoke runs)."""
+    import numpy as np
+
+    q = np.asarray(obs["observation/joint_position"], dtype=np.float64).reshape(7)
+    a = np.concatenate([np.tile(q, (horizon, 1)), np.zeros((horizon, 1))], axis=1)
+    return {"actions": a}

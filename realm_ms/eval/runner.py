@@ -1,0 +1,361 @@
+"""THE episode loop, and the driver that runs a plan of episodes through it.
+
+``EpisodeRunner`` owns one env (num_envs = 1, CPU physics) in whichever process steps it: it resets
+to an ``EpisodeKey`` (building the env for that task and perturbation, reused while they stay the
+same), executes action chunks open-loop (or asks an env-side policy such as the scripted expert
+every step), tracks stage latches, progression and trajectory quality, writes optional videos, and
+returns one record per finished episode. The expert bench, ``realm demo`` and ``realm eval`` all
+run episodes through it.
+
+``run_plan`` is the driver: it keeps every slot of a backend busy (``workers.py``: in-process, N
+worker processes, Ray), calls the policy once per round on the batch of slots that need actions,
+appends each finished record atomically, and shows a live progress bar.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from realm_ms.eval.policies.base import ObsRequest, PolicyInput
+from realm_ms.eval.protocol import DEFAULT, EpisodeKey
+
+VIDEO_CAMERAS = ("exterior_1", "wrist")
+
+
+@dataclass
+class RunConfig:
+    """Env-side settings of a run (picklable: sent to worker processes)."""
+
+    policy: str = "zero"  # policy spec (recorded; env-side policies are rebuilt from it)
+    env_side: bool = False
+    max_steps: int = 800
+    replan_every: int = 8
+    success_tail: int = 15
+    obs: ObsRequest = field(default_factory=ObsRequest)
+    videos: str = "none"  # none | failures | all
+    videos_dir: str | None = None
+    quality: bool = True
+    env_kwargs: dict = field(default_factory=dict)
+
+    def needs_rgb(self) -> bool:
+        return bool(self.obs.cameras) or self.videos != "none"
+
+
+def jsonable(x):
+    """Tensors / arrays / numpy scalars inside nested dicts and lists -> plain JSON values."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if hasattr(x, "detach"):
+        x = x.detach().cpu().numpy()
+    if isinstance(x, np.ndarray):
+        x = x.tolist()
+        return x[0] if isinstance(x, list) and len(x) == 1 and not isinstance(x[0], list) else x
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def make_env(task: str, perturbation: str, cfg: RunConfig):
+    """The env for one (task, perturbation) cell; ``perturbation=`` is passed unless Default."""
+    import gymnasium as gym
+
+    import realm_ms  # noqa: F401  (registers the REALM-* envs)
+
+    kw = dict(
+        obs_mode="rgb" if cfg.needs_rgb() else "state_dict",
+        control_mode="droid_joint_pos",
+        max_episode_steps=cfg.max_steps,
+        success_tail=cfg.success_tail,
+        camera_width=cfg.obs.width,
+        camera_height=cfg.obs.height,
+    )
+    kw.update(cfg.env_kwargs)
+    if perturbation != DEFAULT:
+        kw["perturbation"] = perturbation
+    return gym.make(task, **kw)
+
+
+class EpisodeRunner:
+    """Runs episodes of any (task, perturbation, seed) on one env; see the module docstring."""
+
+    def __init__(self, cfg: RunConfig):
+        self.cfg = cfg
+        self.env = None
+        self.cell: tuple[str, str] | None = None
+        self.env_policy = None
+        self.key: EpisodeKey | None = None
+
+    # ------------------------------------------------------------------ env lifecycle
+    def _ensure_env(self, key: EpisodeKey) -> None:
+        if self.cell == key.cell() and self.env is not None:
+            return
+        self.close()
+        self.env = make_env(key.task, key.perturbation, self.cfg)
+        self.cell = key.cell()
+        self.env_policy = None
+
+    def close(self) -> None:
+        if self.env is not None:
+            self.env.close()
+        self.env, self.cell, self.env_policy = None, None, None
+
+    # ------------------------------------------------------------------ observations
+    def observation(self, obs) -> dict:
+        """Numpy view of what the policy needs: ``state`` (8,), ``images[cam]`` (H, W, 3) uint8."""
+        u = self.env.unwrapped
+        out = {"state": u.agent.droid_state()[0].detach().cpu().numpy().astype(np.float32), "images": {}}
+        for cam in self.cfg.obs.cameras:
+            out["images"][cam] = obs["sensor_data"][cam]["rgb"][0].detach().cpu().numpy()
+        out["instruction"] = self.instruction
+        out["steps"] = self.steps
+        return out
+
+    # ------------------------------------------------------------------ episodes
+    def start(self, key: EpisodeKey) -> dict:
+        """Reset to ``key``; returns the first observation (see ``observation``)."""
+        import torch
+
+        try:
+            self._ensure_env(key)
+        except NotImplementedError as e:  # a cell the perturbation does not support (REALM: 9 of 160)
+            self.key, self.unsupported = key, str(e) or "unsupported"
+            return {"unsupported": self.unsupported}
+        self.unsupported = None
+        self.key = key
+        self.t0 = time.perf_counter()
+        obs, info = self.env.reset(seed=key.seed)
+        u = self.env.unwrapped
+        if self.cfg.env_side:
+            if self.env_policy is None:
+                from realm_ms.eval.policies import make_policy
+
+                self.env_policy = make_policy(self.cfg.policy).make_env_policy(u)
+            else:
+                self.env_policy.reset()
+        self.obs = obs
+        self.instruction = u.get_language_instruction()[0]
+        self.perturbation_info = jsonable(info.get("perturbation", {"name": DEFAULT, "params": {}} if key.perturbation == DEFAULT else {}))
+        self.stages = [s.value for s in u.tracker.stages]
+        self.latched: dict[str, int | None] = {s: None for s in self.stages}
+        self.best, self.rises, self.steps = 0.0, [], 0
+        self.info = {"success": torch.zeros(1, dtype=torch.bool)}
+        self.quality = None
+        if self.cfg.quality:
+            from realm_ms.eval.quality import TrajectoryQuality
+
+            self.quality = TrajectoryQuality(self.env)
+        self.frames: list[np.ndarray] = []
+        self._frame(obs)
+        return self.observation(obs)
+
+    def _frame(self, obs) -> None:
+        if self.cfg.videos == "none":
+            return
+        cams = [obs["sensor_data"][c]["rgb"][0].detach().cpu().numpy() for c in VIDEO_CAMERAS]
+        h = min(c.shape[0] for c in cams)
+        self.frames.append(np.concatenate([c[:h] for c in cams], axis=1))
+
+    def step(self, actions: np.ndarray | None = None, n: int | None = None) -> tuple[dict | None, dict | None]:
+        """Execute ``actions`` (T, 8) open-loop, at most ``n`` of them (default ``replan_every``), or
+        ``n`` env-side policy steps. Returns (observation, None) or (None, record) when finished."""
+        import torch
+
+        if getattr(self, "unsupported", None):
+            return None, self._unsupported_record()
+        env, u = self.env, self.env.unwrapped
+        n = n or self.cfg.replan_every
+        if actions is not None:
+            n = min(n, len(actions))
+        done = False
+        for i in range(n):
+            if actions is not None:
+                a = torch.as_tensor(np.asarray(actions[i], dtype=np.float32))[None]
+            else:
+                a = self.env_policy.act(self.obs)
+            self.obs, _, term, trunc, info = env.step(a)
+            self.info = info
+            self.steps += 1
+            prog = float(info["progression"][0])
+            if prog > self.best + 1e-9:
+                self.best = prog
+                self.rises.append(self.steps)
+            for s in self.stages:
+                if self.latched[s] is None and bool(info[f"stage_{s.lower()}"][0]):
+                    self.latched[s] = self.steps
+            if self.quality is not None:
+                self.quality.update()
+            self._frame(self.obs)
+            script_over = actions is None and bool(getattr(self.env_policy, "done", [False])[0])
+            if bool(term[0]) or bool(trunc[0]) or self.steps >= self.cfg.max_steps or script_over:
+                done = True
+                break
+        if done:
+            return None, self._record("ok")
+        return self.observation(self.obs), None
+
+    def abort(self, error: str) -> dict:
+        """End the current episode as failed by the policy side (e.g. its server stayed down)."""
+        return self._record("error", error)
+
+    # ------------------------------------------------------------------ records
+    def _base(self) -> dict:
+        k = self.key
+        return dict(task=k.task, perturbation=k.perturbation, seed=k.seed, policy=self.cfg.policy)
+
+    def _unsupported_record(self) -> dict:
+        return self._base() | dict(status="unsupported", error=self.unsupported, success=False, progression=0.0, steps=0)
+
+    def _record(self, status: str, error: str | None = None) -> dict:
+        u = self.env.unwrapped
+        success = bool(self.info["success"][0])
+        rec = self._base() | dict(
+            status=status,
+            perturbation_params=self.perturbation_info,
+            instruction=self.instruction,
+            skill=u.task_spec.skill,
+            success=success,
+            progression=round(self.best, 6),
+            progression_timestamps=self.rises,
+            stages=self.latched,
+            stalled_stage=u.stalled_stage()[0],
+            steps=self.steps,
+            max_steps=self.cfg.max_steps,
+            replan_every=self.cfg.replan_every,
+            wall_s=round(time.perf_counter() - self.t0, 3),
+            quality=self.quality.summary() if self.quality is not None else None,
+        )
+        if error:
+            rec["error"] = error
+        if self.frames and (self.cfg.videos == "all" or (self.cfg.videos == "failures" and not success)):
+            rec["video"] = self._write_video()
+        self.frames = []
+        return jsonable(rec)
+
+    def _write_video(self) -> str | None:
+        import imageio.v2 as imageio
+
+        d = Path(self.cfg.videos_dir or "videos")
+        d.mkdir(parents=True, exist_ok=True)
+        k = self.key
+        path = d / f"{k.task}__{k.perturbation}__{k.seed}.mp4"
+        imageio.mimwrite(path, self.frames, fps=15, macro_block_size=8)
+        return str(path)
+
+
+# ---------------------------------------------------------------------------------------- driver
+@dataclass
+class Progress:
+    """Live counters behind the progress bar (and the throughput bench)."""
+
+    total: int = 0
+    done: int = 0
+    successes: int = 0
+    errors: int = 0
+    env_steps: int = 0
+    started: float = field(default_factory=time.perf_counter)
+
+    def steps_per_s(self) -> float:
+        return self.env_steps / max(time.perf_counter() - self.started, 1e-9)
+
+
+def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: bool = True, replan_every: int = 8) -> Progress:
+    """Run ``keys`` on ``backend`` with ``policy``; ``on_record(record)`` is called per finished episode.
+
+    One round: every free slot starts the next key (preferring its current (task, perturbation),
+    so envs are reused), the policy acts once on the batch of slots that need actions, and every
+    active slot executes its chunk. Errors of the policy for one row fail that episode only."""
+    from tqdm import tqdm
+
+    queue = list(keys)
+    prog = Progress(total=len(keys))
+    bar = tqdm(total=len(keys), desc="episodes", unit="ep", disable=not progress_bar, dynamic_ncols=True)
+    active: dict[int, EpisodeKey] = {}
+    pending: dict[int, dict] = {}  # slot -> latest observation
+
+    def count_steps(slot: int, steps: int) -> None:
+        prev = pending.get(slot, {}).get("steps", 0) or 0
+        prog.env_steps += max(0, int(steps or 0) - prev)
+
+    def finish(slot: int, rec: dict) -> None:
+        count_steps(slot, rec.get("steps", 0))
+        active.pop(slot, None)
+        pending.pop(slot, None)
+        on_record(rec)
+        prog.done += 1
+        prog.successes += int(bool(rec.get("success")))
+        prog.errors += int(rec.get("status") == "error")
+        bar.update(1)
+        bar.set_postfix(success=f"{prog.successes}/{prog.done}", steps_s=f"{prog.steps_per_s():.1f}", refresh=False)
+
+    try:
+        while queue or active:
+            starts = {}
+            for slot in range(backend.n_slots):
+                if slot in active or not queue:
+                    continue
+                cell = backend.cell(slot)
+                j = next((i for i, k in enumerate(queue) if k.cell() == cell), 0)
+                starts[slot] = queue.pop(j)
+            if starts:
+                for slot, obs in backend.start(starts).items():
+                    if "failed_record" in obs:  # the worker could not even reset: that episode fails
+                        finish(slot, obs["failed_record"])
+                        continue
+                    active[slot] = starts[slot]
+                    pending[slot] = obs
+                if not policy.env_side:
+                    policy.reset(sorted(starts))
+            commands: dict[int, np.ndarray | None] = {}
+            aborts: dict[int, str] = {}
+            ready = sorted(s for s in active if "unsupported" not in pending[s])
+            if policy.env_side or not ready:
+                commands = {s: None for s in active}
+            else:
+                batch = PolicyInput(
+                    state=np.stack([pending[s]["state"] for s in ready]),
+                    instructions=[pending[s]["instruction"] for s in ready],
+                    images={c: np.stack([pending[s]["images"][c] for s in ready]) for c in pending[ready[0]]["images"]},
+                    slots=ready,
+                )
+                out = policy.act(batch)
+                for i, s in enumerate(ready):
+                    if out.errors and out.errors[i]:
+                        aborts[s] = out.errors[i]
+                    else:
+                        commands[s] = out.actions[i, :replan_every]
+                commands.update({s: None for s in active if s not in ready})
+            if aborts:
+                for slot, rec in backend.abort(aborts).items():
+                    finish(slot, rec)
+            for slot, (obs, rec) in backend.step(commands).items():
+                if rec is not None:
+                    finish(slot, rec)
+                else:
+                    count_steps(slot, obs.get("steps", 0))
+                    pending[slot] = obs
+            bar.set_postfix(success=f"{prog.successes}/{prog.done}", steps_s=f"{prog.steps_per_s():.1f}", refresh=False)
+    finally:
+        bar.close()
+    return prog
+
+
+def default_workers() -> int:
+    return max(1, min(os.cpu_count() or 1, 16))
+
+
+def record_to_summary(rec: dict) -> dict:
+    """The fields the expert bench and demo print."""
+    return {k: rec.get(k) for k in ("task", "perturbation", "seed", "progression", "success", "stalled_stage", "steps", "wall_s")}
+
+
+__all__ = ["RunConfig", "EpisodeRunner", "run_plan", "make_env", "Progress", "asdict"]

@@ -1,0 +1,65 @@
+"""`realm export`: REALM episodes (scripted-expert demonstrations) -> a LeRobot v3.0 dataset.
+
+    realm export --policy expert --tasks REALM-PickApple-v1 REALM-OpenDrawer-v1 [--perturbations Default V-LIGHT]
+                 --episodes 10 [--seed 0] --out data/realm_demos [--repo-id realm/demos] [--success-only]
+
+    realm export --from-eval outputs/eval/RUN --out data/realm_eval_episodes   # episodes of a `realm eval` run
+
+Rerunning the same command resumes: episodes already in the dataset are skipped.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("export", help="write REALM episodes to a LeRobot v3.0 dataset (DROID features)",
+                       description=__doc__.splitlines()[0])
+    p.add_argument("--policy", default="expert", help="policy that acts (default: expert, the privileged scripted expert)")
+    p.add_argument("--tasks", nargs="+", metavar="ID", help="REALM env ids, or 'all'")
+    p.add_argument("--perturbations", nargs="+", default=["Default"], metavar="NAME", help="perturbation names (default: Default)")
+    p.add_argument("--episodes", type=int, help="episodes per (task, perturbation)")
+    p.add_argument("--seed", type=int, default=0, help="episode k of each (task, perturbation) uses seed + k")
+    p.add_argument("--out", type=Path, required=True, help="dataset root (created, or resumed if it holds a dataset)")
+    p.add_argument("--repo-id", default=None, help="dataset repo id (default: realm/<out dir name>)")
+    p.add_argument("--success-only", action="store_true", help="drop failed episodes (and try further seeds)")
+    p.add_argument("--width", type=int, default=320, help="camera width (default 320)")
+    p.add_argument("--height", type=int, default=180, help="camera height (default 180)")
+    p.add_argument("--max-steps", type=int, default=None, help="control steps per episode (default: task horizon)")
+    from realm_ms.rendering import SHADERS  # the one shader table
+
+    p.add_argument("--shader", default="default", choices=SHADERS,
+                   help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
+    p.add_argument("--from-eval", type=Path, default=None, metavar="RUN",
+                   help="re-simulate the episodes of a `realm eval` run (its records.jsonl) instead of --tasks")
+    p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes (resume granularity)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from realm_ms.cli import UserError
+    from realm_ms.lerobot.export import ExportConfig, ExportError, export_dataset, export_eval_run
+    from realm_ms.registry import UnknownNameError
+
+    if args.from_eval is None and (not args.tasks or args.episodes is None):
+        raise UserError("give --tasks and --episodes (or --from-eval RUN)")
+    if args.from_eval is not None and args.tasks:
+        raise UserError("--from-eval takes its tasks from the run's records; drop --tasks")
+    tasks = args.tasks or []
+    if tasks == ["all"]:
+        from realm_ms.tasks import TASKS
+
+        tasks = sorted(TASKS)
+    try:
+        cfg = ExportConfig(
+            out=args.out, tasks=tasks, episodes=args.episodes or 1, perturbations=args.perturbations, seed=args.seed,
+            policy=args.policy, repo_id=args.repo_id, success_only=args.success_only, width=args.width,
+            height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=max(1, args.commit_every),
+        )
+        summary = export_eval_run(args.from_eval, cfg) if args.from_eval is not None else export_dataset(cfg)
+    except (ExportError, UnknownNameError) as e:
+        raise UserError(str(e)) from None
+    print(f"wrote {summary['written']} episode(s) ({summary['already']} already there, {summary['dropped']} dropped); "
+          f"{summary['total_episodes']} in {summary['root']} (repo id {summary['repo_id']})")
+    return 0

@@ -1,0 +1,97 @@
+"""Helpers shared by perturbation modules: instruction nouns, object pools, graspability, regions."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+import numpy as np
+
+from realm_ms.tasks.spec import SceneObject, TaskSpec
+
+# the instruction's phrase for the main / target object where the slot name is not it
+MAIN_NOUNS = {
+    "REALM-PickSpoon-v1": "spoon",
+    "REALM-PickWaterBottle-v1": "water bottle",
+    "REALM-OpenDrawer-v1": "drawer",
+    "REALM-CloseDrawer-v1": "drawer",
+}
+TARGET_NOUNS = {"REALM-PutBananaInBox-v1": "box"}
+
+# where added objects (clutter, receivers) may go: the table area the arm reaches top-down
+WIDE_REGION = (0.30, 0.80, -0.42, 0.42)
+GRIPPER_OPENING = 0.085  # m, Robotiq 2F-85
+GRASPABLE_WIDTH = 0.07  # m: the narrower horizontal extent must leave the fingers some room
+
+
+def slot_noun(obj: SceneObject) -> str:
+    """``toy_dice_1`` -> ``toy dice``: the task author's name for an object, as a noun phrase."""
+    return re.sub(r"_\d+$", "", obj.name).replace("_", " ")
+
+
+def main_noun(spec: TaskSpec) -> str:
+    return MAIN_NOUNS.get(spec.env_id, slot_noun(spec.main))
+
+
+def target_noun(spec: TaskSpec) -> str | None:
+    t = spec.by_role("target")
+    return TARGET_NOUNS.get(spec.env_id, slot_noun(t[0])) if t else None
+
+
+def replace_noun(text: str, old: str, new: str) -> str:
+    """Replace the whole-word noun phrase ``old`` (first occurrence) by ``new``."""
+    out, n = re.subn(rf"\b{re.escape(old)}\b", new, text, count=1)
+    return out if n else text
+
+
+def with_object(spec: TaskSpec, name: str, **changes) -> TaskSpec:
+    return replace(spec, objects=tuple(replace(o, **changes) if o.name == name else o for o in spec.objects))
+
+
+def object_spec(asset: str):
+    from realm_ms.assets import get_object_spec
+
+    return get_object_spec(asset)
+
+
+def cap_scale(asset: str, max_extent: float, scale=(1.0, 1.0, 1.0)) -> tuple[float, float, float]:
+    """Uniform shrink (never grow, as REALM's ``replace_obj``) so the scaled object's largest extent
+    is at most ``max_extent``."""
+    ext = object_spec(asset).extents * np.asarray(scale, float)
+    k = min(1.0, max_extent / float(ext.max()))
+    return tuple(float(s * k) for s in np.broadcast_to(np.asarray(scale, float), (3,)))
+
+
+def graspable(extents) -> bool:
+    """A top-down two-finger grasp fits across the narrower horizontal side."""
+    e = np.asarray(extents, float)
+    return float(min(e[0], e[1])) <= GRASPABLE_WIDTH and float(e[2]) >= 0.012
+
+
+def sample_ids(rng: np.random.Generator, n: int, **filters) -> list[str]:
+    """``n`` catalog ids (the built catalog, else the procedural one) drawn by category."""
+    from realm_ms.assets import sample_objects
+
+    return [o.id for o in sample_objects(n, rng, **filters)]
+
+
+def categories_of(spec: TaskSpec, roles=("main", "target")) -> tuple[str, ...]:
+    out = []
+    for o in spec.objects:
+        if o.role in roles and not o.asset.startswith("articulated/"):
+            out.append(object_spec(o.asset).category)
+    return tuple(out)
+
+
+def is_articulated(obj: SceneObject) -> bool:
+    return obj.asset.startswith("articulated/")
+
+
+def set_query(asset: str, **params) -> str:
+    """``articulated/light_switch?on=0`` + ``look=2`` -> ``articulated/light_switch?on=0&look=2``."""
+    from urllib.parse import parse_qsl, urlencode
+
+    path, _, query = asset.partition("?")
+    q = dict(parse_qsl(query))
+    q.update({k: (f"{v:.4f}" if isinstance(v, float) else str(v)) for k, v in params.items()})
+    return f"{path}?{urlencode(q)}"

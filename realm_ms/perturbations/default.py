@@ -1,0 +1,10 @@
+"""0 Default: the unperturbed task (the empty composition)."""
+
+from realm_ms.perturbations.base import Perturbation
+
+
+class Default(Perturbation):
+    pid = 0
+    name = "Default"
+    acts_on = "nothing"
+    ranges = "-"

@@ -1,0 +1,66 @@
+"""1 V-AUG: Gaussian blur then contrast on every camera image (exterior + wrist), drawn per reset.
+
+REALM (paper-era ``reset()``): sigma ~ U(0, 2.5), odd kernel ``int(4 sigma + 1)``, then
+``clip(img * alpha, 0, 255)`` with alpha ~ U(0.25, 1.5). Batched: one separable convolution over
+all sub-envs with a per-sub-env kernel (zero weights outside each sub-env's own kernel size).
+"""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+
+from realm_ms.perturbations.base import Perturbation, as_float
+
+SIGMA = (0.0, 2.5)
+ALPHA = (0.25, 1.5)
+MAX_K = int(4 * SIGMA[1] + 1) | 1  # 11
+
+
+def kernel_size(sigma: float) -> int:
+    k = int(4 * sigma + 1)
+    return k if k % 2 else k + 1
+
+
+def gaussian_kernels(sigmas: torch.Tensor, size: int = MAX_K) -> torch.Tensor:
+    """(B,) sigmas -> (B, size) normalised 1-D kernels, truncated to each sigma's own odd size
+    (OpenCV's GaussianBlur with ksize = int(4 sigma + 1)); sigma 0 is the identity."""
+    x = torch.arange(size, dtype=torch.float32, device=sigmas.device) - size // 2
+    s = sigmas.float().clamp(min=1e-6)[:, None]
+    w = torch.exp(-0.5 * (x[None] / s) ** 2)
+    half = torch.tensor([kernel_size(float(v)) // 2 for v in sigmas.cpu()], device=sigmas.device)[:, None]
+    w = w * (x[None].abs() <= half)
+    return w / w.sum(dim=1, keepdim=True)
+
+
+def blur_contrast(img: torch.Tensor, sigma: torch.Tensor, alpha: torch.Tensor) -> torch.Tensor:
+    """img (B, H, W, C) uint8 -> same dtype; per-image sigma and alpha (B,)."""
+    b, h, w, c = img.shape
+    x = img.permute(0, 3, 1, 2).float().reshape(1, b * c, h, w)
+    k = gaussian_kernels(sigma.to(img.device)).repeat_interleave(c, dim=0)  # (B*C, K)
+    p = MAX_K // 2
+    x = F.pad(x, (p, p, 0, 0), mode="reflect")  # OpenCV's default border (reflect-101)
+    x = F.conv2d(x, k[:, None, None, :], groups=b * c)
+    x = F.pad(x, (0, 0, p, p), mode="reflect")
+    x = F.conv2d(x, k[:, None, :, None], groups=b * c)
+    x = x.reshape(b, c, h, w).permute(0, 2, 3, 1)
+    x = x.round() * alpha.to(img.device).float()[:, None, None, None]
+    return x.clamp(0, 255).to(img.dtype)
+
+
+class VAug(Perturbation):
+    pid = 1
+    name = "V-AUG"
+    acts_on = "camera images (exterior + wrist), after rendering"
+    ranges = f"blur sigma ~ U{SIGMA} (kernel int(4 sigma + 1)), contrast alpha ~ U{ALPHA}"
+
+    def draw(self, rng, ctx):
+        return dict(sigma=as_float(rng.uniform(*SIGMA)), alpha=as_float(rng.uniform(*ALPHA)))
+
+    def on_observation(self, env, sensor_data, params):
+        sigma = torch.tensor([p["sigma"] for p in params])
+        alpha = torch.tensor([p["alpha"] for p in params])
+        for cam in sensor_data.values():
+            if "rgb" in cam:
+                cam["rgb"] = blur_contrast(cam["rgb"], sigma, alpha)
+        return sensor_data

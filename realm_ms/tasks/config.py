@@ -1,0 +1,172 @@
+"""``RealmEnvConfig``: the one typed description of a REALM env.
+
+``gym.make("REALM-PickApple-v1", camera_width=640, shader="rt", perturbation="V-LIGHT")`` maps its
+keyword arguments onto this config (the old loose keywords are its field names, see
+``KWARG_FIELDS``); ``gym.make(ID, config=RealmEnvConfig(...))`` passes one whole. The env keeps the
+resolved config as ``env.unwrapped.config``; ``to_dict()`` is plain JSON (records store it) and
+``make_env(RealmEnvConfig.from_dict(d))`` re-creates the same env. Evaluation and the LeRobot
+plugin build their envs through ``make_env``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from realm_ms.agents.droid_controller import DroidControlConfig, ImpedanceGains, JointPhysics
+from realm_ms.rendering import CameraSettings
+from realm_ms.tasks.progression import Thresholds
+
+PerturbationSpec = str | int | tuple | None
+
+
+@dataclass(frozen=True)
+class RealmEnvConfig:
+    """Everything that defines a REALM env, beyond the task's own declaration (``TaskSpec``).
+
+    ``task``, ``obs_mode``, ``control_mode``, ``num_envs``, ``sim_backend``, ``render_mode`` and
+    ``horizon`` are only used by :func:`make_env` (``gym.make`` takes them itself).
+    """
+
+    task: str | None = None  # env id, e.g. "REALM-PickApple-v1"
+    cameras: CameraSettings = field(default_factory=CameraSettings)
+    control: DroidControlConfig | None = None  # Polymetis law settings; None = defaults (or a robot model's)
+    robot_model: str | dict | None = None  # MODEL.yaml path or its dict, from `realm sysid fit`
+    scene: str | None = None  # None = the task's scene
+    perturbation: PerturbationSpec = None  # REALM name / id / list (realm_ms.perturbations); None = Default
+    horizon: int | None = None  # control steps; None = the task's (REALM: 800)
+    settle_steps: int = 5  # control steps before the object reference is captured (REALM's warm-up)
+    success_tail: int = 15  # steps after success before ``terminated``
+    thresholds: Thresholds = field(default_factory=Thresholds)
+    obs_mode: str = "state"
+    control_mode: str = "droid_joint_pos"
+    num_envs: int = 1
+    sim_backend: str = "auto"
+    render_mode: str | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("settle_steps", "success_tail"):
+            _check_int(name, getattr(self, name), minimum=0)
+        _check_int("num_envs", self.num_envs, minimum=1)
+        if self.horizon is not None:
+            _check_int("horizon (max_episode_steps)", self.horizon, minimum=1)
+        if isinstance(self.perturbation, list):
+            object.__setattr__(self, "perturbation", tuple(self.perturbation))
+        if isinstance(self.robot_model, Path):
+            object.__setattr__(self, "robot_model", str(self.robot_model))
+
+    # ------------------------------------------------------------------ gym.make keywords
+    @classmethod
+    def from_kwargs(cls, config: "RealmEnvConfig | None", kwargs: dict) -> tuple["RealmEnvConfig", dict]:
+        """Fold the env keywords of ``kwargs`` into ``config``; returns it and the rest (ManiSkill's)."""
+        cfg = config if config is not None else cls()
+        if not isinstance(cfg, cls):
+            raise TypeError(f"config must be a RealmEnvConfig, got {type(cfg).__name__}")
+        rest = dict(kwargs)
+        cams, top = {}, {}
+        for key, (where, name) in KWARG_FIELDS.items():
+            if key in rest:
+                (cams if where == "cameras" else top)[name] = rest.pop(key)
+        if "control" in top and isinstance(top["control"], dict):
+            top["control"] = DroidControlConfig(**_control_fields(top["control"]))
+        if cams:
+            top["cameras"] = dataclasses.replace(cfg.cameras, **cams)
+        return dataclasses.replace(cfg, **top), rest
+
+    # ------------------------------------------------------------------ serialisation
+    def to_dict(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d["perturbation"] = list(self.perturbation) if isinstance(self.perturbation, tuple) else self.perturbation
+        return _jsonable(d)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "RealmEnvConfig":
+        d = dict(d)
+        unknown = set(d) - {f.name for f in dataclasses.fields(cls)}
+        if unknown:
+            raise ValueError(f"unknown RealmEnvConfig fields {sorted(unknown)}")
+        if isinstance(d.get("cameras"), dict):
+            d["cameras"] = CameraSettings(**d["cameras"])
+        if isinstance(d.get("control"), dict):
+            d["control"] = DroidControlConfig(**_control_fields(d["control"]))
+        if isinstance(d.get("thresholds"), dict):
+            d["thresholds"] = Thresholds(**{k: tuple(v) if isinstance(v, list) else v for k, v in d["thresholds"].items()})
+        return cls(**d)
+
+    def gym_kwargs(self) -> dict[str, Any]:
+        """``gym.make`` keyword arguments that build this env."""
+        if not self.task:
+            raise ValueError("RealmEnvConfig.task is not set: name the env id, e.g. 'REALM-PickApple-v1'")
+        kw: dict[str, Any] = dict(
+            config=dataclasses.replace(self, task=None, horizon=None, obs_mode="state", control_mode="droid_joint_pos",
+                                      num_envs=1, sim_backend="auto", render_mode=None),
+            obs_mode=self.obs_mode, control_mode=self.control_mode, num_envs=self.num_envs,
+            sim_backend=self.sim_backend, render_mode=self.render_mode,
+        )
+        if self.horizon is not None:
+            kw["max_episode_steps"] = self.horizon
+        return kw
+
+
+# gym.make keyword -> (config part, field); the keywords users already know stay valid
+KWARG_FIELDS: dict[str, tuple[str, str]] = {
+    "camera_width": ("cameras", "width"),
+    "camera_height": ("cameras", "height"),
+    "shader": ("cameras", "shader"),
+    "denoiser": ("cameras", "denoiser"),
+    "cameras": ("top", "cameras"),
+    "droid_control": ("top", "control"),
+    "robot_model": ("top", "robot_model"),
+    "scene_name": ("top", "scene"),
+    "scene": ("top", "scene"),
+    "perturbation": ("top", "perturbation"),
+    "settle_steps": ("top", "settle_steps"),
+    "success_tail": ("top", "success_tail"),
+    "thresholds": ("top", "thresholds"),
+}
+
+
+def make_env(config: RealmEnvConfig, **overrides):
+    """``gym.make`` the env that ``config`` describes (``overrides``: more ``gym.make`` keywords)."""
+    import gymnasium as gym
+
+    import realm_ms
+
+    realm_ms.register_envs()
+    return gym.make(config.task, **(config.gym_kwargs() | overrides))
+
+
+def _check_int(name: str, v: Any, minimum: int) -> None:
+    if isinstance(v, bool) or not isinstance(v, int) and not (isinstance(v, float) and math.isfinite(v) and v == int(v)):
+        raise ValueError(f"{name} must be a whole number >= {minimum}, got {v!r}")
+    if int(v) < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {v!r}")
+
+
+def _control_fields(d: dict) -> dict:
+    d = dict(d)
+    unknown = set(d) - {f.name for f in dataclasses.fields(DroidControlConfig)}
+    if unknown:
+        raise ValueError(f"unknown droid_control fields {sorted(unknown)}; known: "
+                         f"{', '.join(f.name for f in dataclasses.fields(DroidControlConfig))}")
+    if isinstance(d.get("gains"), dict):
+        d["gains"] = ImpedanceGains(**{k: tuple(v) for k, v in d["gains"].items()})
+    if isinstance(d.get("joint_physics"), dict):
+        d["joint_physics"] = JointPhysics(**{k: tuple(v) for k, v in d["joint_physics"].items()})
+    for k, v in list(d.items()):
+        if isinstance(v, list):
+            d[k] = tuple(v)
+    return d
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return str(x)
+    return x

@@ -1,0 +1,166 @@
+"""Reusable checks of user input: every rejection is one line naming the flag, field or file.
+
+Two forms of each check, so the command line, the Python API and config files reject the same
+things with the same words (``docs/validation.md`` lists what is rejected):
+
+* value checks (``check_positive(x, "--segment", "s")``) raise :class:`InputError` (a
+  ``ValueError``); ``realm`` prints it as ``realm VERB: error: ...`` and exits with code 2;
+* argparse types (``type=positive("s")``) reject a flag while parsing (argparse: exit code 2).
+
+Numbers: NaN and infinities are always rejected; ``positive`` means > 0, ``non-negative`` >= 0.
+Output paths are checked *before* long work starts (an existing directory where a file is wanted,
+a parent that is a file, an unwritable directory).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+from pathlib import Path
+from typing import Any, Callable
+
+
+class InputError(ValueError):
+    """Bad user input; the message names what is wrong and where (flag, field or file)."""
+
+
+def _units(unit: str) -> str:
+    return f" {unit}" if unit else ""
+
+
+def check_number(value: Any, where: str, unit: str = "", *, minimum: float | None = None,
+                 inclusive: bool = True, maximum: float | None = None) -> float:
+    """A finite real number (not bool, not an array), optionally bounded below/above."""
+    if isinstance(value, bool):
+        raise InputError(f"{where}: expected a number{_units(unit)}, got {value!r}")
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        shape = getattr(value, "shape", None)
+        got = f"an array of shape {tuple(shape)}" if shape is not None else repr(value)
+        raise InputError(f"{where}: expected a single number{_units(unit)}, got {got}") from None
+    if not math.isfinite(x):
+        raise InputError(f"{where}: must be a finite number{_units(unit)}, got {value!r}")
+    if minimum is not None and (x < minimum or (not inclusive and x == minimum)):
+        rel = ">=" if inclusive else ">"
+        raise InputError(f"{where}: must be {rel} {minimum:g}{_units(unit)}, got {x:g}")
+    if maximum is not None and x > maximum:
+        raise InputError(f"{where}: must be <= {maximum:g}{_units(unit)}, got {x:g}")
+    return x
+
+
+def check_positive(value: Any, where: str, unit: str = "") -> float:
+    """A finite number > 0."""
+    return check_number(value, where, unit, minimum=0.0, inclusive=False)
+
+
+def check_non_negative(value: Any, where: str, unit: str = "") -> float:
+    """A finite number >= 0."""
+    return check_number(value, where, unit, minimum=0.0)
+
+
+def check_int(value: Any, where: str, minimum: int = 1, maximum: int | None = None) -> int:
+    """An integer >= ``minimum`` (a float is accepted only when it is whole)."""
+    if isinstance(value, bool):
+        raise InputError(f"{where}: expected an integer, got {value!r}")
+    try:
+        x = float(value)
+        ok = math.isfinite(x) and x == int(x)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise InputError(f"{where}: expected an integer, got {value!r}")
+    n = int(x)
+    if n < minimum:
+        raise InputError(f"{where}: must be >= {minimum}, got {n}")
+    if maximum is not None and n > maximum:
+        raise InputError(f"{where}: must be <= {maximum}, got {n}")
+    return n
+
+
+def check_input_file(path: str | os.PathLike, where: str, suffixes: tuple[str, ...] = ()) -> Path:
+    """An existing regular file (with one of ``suffixes`` if given)."""
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{where}: {p} does not exist")
+    if p.is_dir():
+        raise InputError(f"{where}: {p} is a directory, expected a file")
+    if suffixes and p.suffix.lower() not in suffixes:
+        raise InputError(f"{where}: {p} should be a {' or '.join(suffixes)} file")
+    return p
+
+
+def check_output_file(path: str | os.PathLike, where: str) -> Path:
+    """A file path that can be written: not an existing directory, and its parent is (or can be
+    made) a writable directory. Checked before long work, so a run never fails at its end."""
+    p = Path(path)
+    if str(path) == "" or p.name in ("", ".", ".."):
+        raise InputError(f"{where}: {str(path)!r} is not a file name")
+    if p.is_dir():
+        raise InputError(f"{where}: {p} is a directory; give a file path (e.g. {p / 'MODEL.yaml'})")
+    _check_parent(p, where)
+    return p
+
+
+def check_output_dir(path: str | os.PathLike, where: str) -> Path:
+    """A directory that can be created or written into (not an existing file)."""
+    p = Path(path)
+    if str(path) == "":
+        raise InputError(f"{where}: empty path")
+    if p.exists() and not p.is_dir():
+        raise InputError(f"{where}: {p} exists and is a file; give a directory")
+    if p.is_dir():
+        if not os.access(p, os.W_OK | os.X_OK):
+            raise InputError(f"{where}: directory {p} is not writable")
+        return p
+    _check_parent(p, where)
+    return p
+
+
+def _check_parent(p: Path, where: str) -> None:
+    parent = p.absolute().parent
+    while not parent.exists():  # the nearest existing ancestor decides whether we can create it
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{where}: cannot create {p}: {parent} is a file")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{where}: cannot write {p}: directory {parent} is not writable")
+
+
+def check_choice(value: Any, where: str, choices: tuple[str, ...] | list[str]) -> str:
+    if value not in choices:
+        raise InputError(f"{where}: unknown value {value!r}; choose one of {', '.join(map(str, choices))}")
+    return value
+
+
+# ---------------------------------------------------------------------------- argparse types
+def _argtype(check: Callable[[str], Any], name: str) -> Callable[[str], Any]:
+    def parse(text: str):
+        try:
+            return check(text)
+        except InputError as e:  # argparse prefixes "argument --flag: "
+            raise argparse.ArgumentTypeError(str(e).split(": ", 1)[1]) from None
+
+    parse.__name__ = name  # argparse uses it in "invalid <name> value"
+    return parse
+
+
+def positive(unit: str = "") -> Callable[[str], float]:
+    """argparse type: a finite number > 0 (in ``unit``)."""
+    return _argtype(lambda s: check_positive(s, "value", unit), "positive number")
+
+
+def non_negative(unit: str = "") -> Callable[[str], float]:
+    """argparse type: a finite number >= 0 (in ``unit``)."""
+    return _argtype(lambda s: check_non_negative(s, "value", unit), "non-negative number")
+
+
+def integer(minimum: int = 1, maximum: int | None = None) -> Callable[[str], int]:
+    """argparse type: an integer >= ``minimum``."""
+    return _argtype(lambda s: check_int(s, "value", minimum, maximum), "integer")
+
+
+def finite(unit: str = "") -> Callable[[str], float]:
+    """argparse type: any finite number."""
+    return _argtype(lambda s: check_number(s, "value", unit), "number")

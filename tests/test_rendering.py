@@ -1,0 +1,122 @@
+"""Rendering: every shader x camera renders a non-blank frame, ray-traced exposure matches raster,
+the denoiser is decided once (and never silently), V-LIGHT maps onto our light units.
+
+Runs on lavapipe (CPU) in CI and on a GPU: frames are checked by statistics, not pixels.
+"""
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import realm_ms  # noqa: F401
+from realm_ms import rendering
+from realm_ms.rendering import frame_stats
+
+ENV = "REALM-PickApple-v1"
+SIZE = dict(camera_width=64, camera_height=36)
+SHADERS = ("default", "rt-fast", "rt")
+CAMERAS = ("exterior_1", "exterior_2", "wrist")
+# rt exposure vs raster on the same scene: mean within MEAN_TOL (0..255), contrast ratio within CONTRAST_TOL
+MEAN_TOL = 15.0
+CONTRAST_TOL = (0.75, 1.33)
+
+
+@pytest.fixture(scope="module")
+def frames():
+    """{shader: {camera: HxWx3 uint8}} of one task after reset (seed 0). ``rt`` keeps its path
+    depth but renders 4 spp instead of 32 so the module stays within CI time on lavapipe."""
+    from mani_skill.render.shaders import PREBUILT_SHADER_CONFIGS
+
+    rt = PREBUILT_SHADER_CONFIGS["rt"].shader_pack_config
+    spp = rt["ray_tracing_samples_per_pixel"]
+    rt["ray_tracing_samples_per_pixel"] = 4
+    out = {}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for shader in SHADERS:
+                env = gym.make(ENV, obs_mode="rgb", shader=shader, **SIZE)
+                obs, _ = env.reset(seed=0)
+                out[shader] = {cam: obs["sensor_data"][cam]["rgb"][0].cpu().numpy() for cam in obs["sensor_data"]}
+                out[shader + "/configs"] = {k: c.shader_config for k, c in env.unwrapped._sensor_configs.items()}
+                env.close()
+    finally:
+        rt["ray_tracing_samples_per_pixel"] = spp
+    return out
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("shader", SHADERS)
+def test_every_camera_renders_non_blank(frames, shader):
+    assert set(CAMERAS) <= set(frames[shader])
+    for cam in CAMERAS:
+        img = frames[shader][cam]
+        assert img.shape == (36, 64, 3)
+        mean, std = frame_stats(img)
+        assert std > 8.0, f"{shader}/{cam}: blank frame (std {std:.1f})"
+        assert 25.0 < mean < 235.0, f"{shader}/{cam}: black or blown-out frame (mean {mean:.1f})"
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("shader", ("rt-fast", "rt"))
+def test_rt_exposure_matches_raster(frames, shader):
+    for cam in CAMERAS:
+        m0, s0 = frame_stats(frames["default"][cam])
+        m1, s1 = frame_stats(frames[shader][cam])
+        assert abs(m1 - m0) < MEAN_TOL, f"{shader}/{cam}: mean {m1:.1f} vs raster {m0:.1f}"
+        assert CONTRAST_TOL[0] < s1 / s0 < CONTRAST_TOL[1], f"{shader}/{cam}: contrast {s1:.1f} vs raster {s0:.1f}"
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("shader", ("rt-fast", "rt"))
+def test_one_denoiser_for_every_camera(frames, shader):
+    cfgs = frames[shader + "/configs"]
+    assert set(CAMERAS) <= set(cfgs)
+    chosen = {c.shader_pack_config["ray_tracing_denoiser"] for c in cfgs.values()}
+    assert chosen == {rendering.resolve_denoiser("auto")}
+
+
+def test_denoiser_is_probed_and_never_silent():
+    rendering.resolve_denoiser.cache_clear()
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        a = rendering.camera_shader_config("rt-fast")
+        b = rendering.camera_shader_config("rt", "auto")
+    msgs = [str(x.message) for x in w if "denoiser" in str(x.message)]
+    assert len(msgs) == 1 and a.shader_pack_config["ray_tracing_denoiser"] in msgs[0]
+    assert a.shader_pack_config["ray_tracing_denoiser"] == b.shader_pack_config["ray_tracing_denoiser"]
+    if not rendering.cuda_available():
+        assert a.shader_pack_config["ray_tracing_denoiser"] == "none"
+        # forcing a denoiser that cannot run here is an error, not a black or noisy frame
+        res = rendering.probe_denoiser("oidn")
+        assert not res.ok and res.reason
+        with pytest.raises(rendering.DenoiserUnavailable, match="oidn"):
+            rendering.resolve_denoiser("oidn")
+    else:  # a GPU: auto picks a denoiser that passed its probe, or none with the reasons named
+        chosen = a.shader_pack_config["ray_tracing_denoiser"]
+        assert chosen == "none" or rendering.probe_denoiser(chosen).ok
+    assert rendering.camera_shader_config("rt", "none").shader_pack_config["ray_tracing_denoiser"] == "none"
+    assert "ray_tracing_denoiser" not in rendering.camera_shader_config("default", "none").shader_pack_config
+
+
+def test_bad_names_are_clear_errors():
+    with pytest.raises(ValueError, match="unknown shader"):
+        rendering.camera_shader_config("raytrace")
+    with pytest.raises(ValueError, match="unknown denoiser"):
+        rendering.camera_shader_config("rt", "nvidia")
+
+
+def test_realm_light_mapping():
+    lo, hi = rendering.REALM_LIGHT_RANGE
+    white = (255, 255, 255)
+    g_lo = rendering.realm_light_to_scene(lo, white)
+    g_ref = rendering.realm_light_to_scene(rendering.REALM_LIGHT_REF, white)
+    g_hi = rendering.realm_light_to_scene(hi, white)
+    np.testing.assert_allclose(g_ref, 1.0)
+    assert 0.3 < g_lo[0] < 0.5 and 2.0 < g_hi[0] < 3.0  # compressed (Isaac auto-exposure), monotonic
+    warm = rendering.realm_light_to_scene(rendering.REALM_LIGHT_REF)
+    np.testing.assert_allclose(warm, np.array(rendering.REALM_LIGHT_COLOR) / 255)
+    with pytest.raises(ValueError):
+        rendering.realm_light_to_scene(-1.0)
