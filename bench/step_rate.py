@@ -1,7 +1,8 @@
 """Control steps per second of REALM-PickApple-v1 next to ManiSkill's PickCube-v1, same run, same machine.
 
-Modes: state obs (exact controller model every physics step, and ``state_fastctrl`` with the model
-refreshed per control step); 3 raster cameras at 224x224; 3 ray-traced (rt-fast) cameras at 128x128. PickCube
+Modes: state obs (exact controller model every physics step, ``state_fastctrl`` with the model
+refreshed per control step, ``state_implicit`` with the former implicit-damping integrator instead
+of the step-exact one); 3 raster cameras at 224x224; 3 ray-traced (rt-fast) cameras at 128x128. PickCube
 gets the same observation mode with its one camera at the same size/shader, so the ratio shows the
 cost of our robot (8 physics substeps of torque control, a 13-DoF gripper linkage, 3 cameras).
 With CUDA, also physx_cuda throughput for 64..1024 parallel envs (state obs).
@@ -27,6 +28,8 @@ MODES = {
     "state": dict(obs_mode="state"),
     # same, with the controller's model terms refreshed per control step (DroidControlConfig.model_rate)
     "state_fastctrl": dict(obs_mode="state", droid_control=dict(model_rate="control")),
+    # the former integrator (damping on PhysX's implicit drive): what the step-exact default replaced
+    "state_implicit": dict(obs_mode="state", droid_control=dict(integrator="implicit_damping")),
     "raster224": dict(obs_mode="rgb", size=224, shader="default"),
     "rt128": dict(obs_mode="rgb", size=128, shader="rt-fast"),
 }
@@ -70,7 +73,7 @@ def rate(env, steps: int) -> float:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=200)
-    p.add_argument("--modes", default="state,state_fastctrl,raster224,rt128")
+    p.add_argument("--modes", default="state,state_fastctrl,state_implicit,raster224,rt128")
     p.add_argument("--gpu-envs", default="64,256,1024")
     p.add_argument("--out", type=Path, default=Path("outputs/bench/step_rate.json"))
     args = p.parse_args()

@@ -3,7 +3,10 @@
 the GPU-parallel population (speed-up recorded).
 
     python bench/sysid.py [--hidden coulomb_friction:fc=0.3] [--workers N] [--device cpu|cuda|both]
-                          [--out outputs/bench_sysid.json]
+                          [--engine physx|mujoco] [--noise 2e-4] [--out outputs/bench_sysid.json]
+
+``--engine mujoco`` makes the data with the independent MuJoCo reference (same URDF and law, 1 kHz
+controller on a converged plant) instead of the replay simulator itself: sysid on data it did not make.
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=int(os.environ.get("REALM_SYSID_WORKERS", 1)))
     ap.add_argument("--device", choices=["cpu", "cuda", "both"], default="both")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--engine", choices=["physx", "mujoco"], default="physx", help="what makes the data")
+    ap.add_argument("--noise", type=float, default=2e-4, help="sensor noise std, rad")
     ap.add_argument("--out", default="outputs/bench_sysid.json")
     args = ap.parse_args()
     import torch
@@ -53,13 +58,14 @@ def main() -> int:
 
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
-        synth(args.hidden, data, SynthConfig(seed=args.seed, n_train=7, n_heldout=3, duration_s=10.0, rate_hz=15.0))
+        synth(args.hidden, data, SynthConfig(seed=args.seed, n_train=7, n_heldout=3, duration_s=10.0, rate_hz=15.0,
+                                             noise_rad=args.noise, engine=args.engine))
         devices = ["cpu", "cuda"] if args.device == "both" else [args.device]
         devices = [d for d in devices if d == "cpu" or torch.cuda.is_available()]
-        results = [run(d, args.workers, data, args.hidden) for d in devices]
+        results = [dict(run(d, args.workers, data, args.hidden), engine=args.engine) for d in devices]
     cpu = next((r for r in results if r["device"] == "cpu"), None)
     for r in results:
-        print(f"{r['device']:>4} (workers={r['workers']}): diagnose {r['diagnose_s']:.1f} s + fit {r['fit_s']:.1f} s = "
+        print(f"data from {r['engine']}; {r['device']:>4} (workers={r['workers']}): diagnose {r['diagnose_s']:.1f} s + fit {r['fit_s']:.1f} s = "
               f"{r['total_s']:.1f} s; top suspect {r['top_suspect']}; held-out {r['heldout_before_rad']:.2e} -> "
               f"{r['heldout_after_rad']:.2e} rad (noise floor {r['noise_floor_rad']:.2e}); {r['profile']}")
         if cpu and r["device"] == "cuda":

@@ -1,8 +1,9 @@
 """`realm` command line: one entry point, one subcommand module per area.
 
 Each module listed in ``COMMANDS`` exposes ``add_parser(subparsers)`` which registers its
-subcommand(s) and sets ``func`` on the parsed namespace. Modules keep heavy imports (torch,
-sapien, mani_skill) inside their handlers so ``realm --help`` stays fast (a test checks it). The
+subcommand and sets ``func`` on the parsed namespace. Only the module of the command being run is
+imported (``realm --help`` lists the commands from ``COMMANDS`` alone), and modules keep heavy
+imports (torch, sapien, mani_skill) inside their handlers, so help is instant (a test checks it). The
 ``REALM-*`` envs are registered before a handler runs, unless its parser says
 ``set_defaults(needs_envs=False)`` (sysid, assets). Bad input ends in one line on stderr and exit
 code 2: ``UserError`` from handlers, ``realm_ms.validate.InputError`` (and its subclasses, e.g. the
@@ -14,28 +15,38 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from collections.abc import Iterable
+
+from realm_ms.errors import UserError  # noqa: F401  (re-exported: raised by every command module)
 
 # subcommand name -> module providing add_parser(); later areas append here.
-COMMANDS: dict[str, str] = {
-    "demo": "realm_ms.demo",
-    "sysid": "realm_ms.sysid.cli",
-    "assets": "realm_ms.assets.cli",
-    "perturbations": "realm_ms.perturbations.cli",
-    "export": "realm_ms.lerobot.cli",
+# subcommand -> (module providing add_parser(), one-line help shown by `realm --help`). Only the
+# module of the command being run is imported: `realm --help` imports none of them.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("realm_ms.demo", "run the scripted expert on REALM tasks; write videos + a progression table"),
+    "sysid": ("realm_ms.sysid.cli", "system identification: compare, diagnose, fit, report"),
+    "assets": ("realm_ms.assets.cli", "build and inspect the object catalog"),
+    "perturbations": ("realm_ms.perturbations.cli", "REALM's perturbations: list them, render a contact sheet"),
+    "export": ("realm_ms.lerobot.cli", "write REALM episodes to a LeRobot v3.0 dataset (DROID features)"),
+    "eval": ("realm_ms.eval.cli", "evaluate a policy under the REALM protocol; `realm eval report RUN/` for the report"),
+    "validate": ("realm_ms.eval.validate", "real-vs-sim validation: Pearson r, MMRV, RMSD from a paired CSV"),
+    "render": ("realm_ms.render_cli", "render contact sheets of the tasks' cameras"),
 }
 
 
-class UserError(Exception):
-    """Bad input from the user: printed as one clear message, never as a traceback."""
-
-
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
+    """The ``realm`` parser; the subcommands in ``load`` (default: all) get their full parsers, the
+    others a placeholder that only lists them."""
     from realm_ms import __version__
 
     parser = argparse.ArgumentParser(prog="realm", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"realm-ms {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name, module in COMMANDS.items():
+    load = set(COMMANDS) if load is None else set(load)
+    for name, (module, help_text) in COMMANDS.items():
+        if name not in load:
+            sub.add_parser(name, help=help_text, add_help=False)
+            continue
         try:
             mod = importlib.import_module(module)
         except ModuleNotFoundError as e:
@@ -46,10 +57,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _prog(parser: argparse.ArgumentParser, argv: list[str] | None) -> str:
+def _command(argv: list[str]) -> str | None:
+    """The subcommand named in ``argv`` (the first token that is one), if any."""
+    return next((a for a in argv if a in COMMANDS), None)
+
+
+def _prog(parser: argparse.ArgumentParser, argv: list[str]) -> str:
     """``realm sysid compare``: the deepest subcommand named in ``argv``."""
     cur = parser
-    for token in sys.argv[1:] if argv is None else argv:
+    for token in argv:
         subs = [a for a in cur._actions if isinstance(a, argparse._SubParsersAction)]
         if subs and token in subs[0].choices:
             cur = subs[0].choices[token]
@@ -57,7 +73,9 @@ def _prog(parser: argparse.ArgumentParser, argv: list[str] | None) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = _command(argv)
+    parser = build_parser([command] if command else [])
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

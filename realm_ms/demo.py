@@ -1,128 +1,76 @@
-"""`realm demo`: the scripted expert on REALM tasks, with a video per task and a progression table.
+"""`realm demo`: a quick-protocol evaluation run ending in its HTML report.
 
-Writes to ``outputs/demo/``: ``<env_id>.mp4`` (human-view camera above the two exterior cameras and
-the wrist camera, 15 fps), ``summary.json`` (per task: progression, success, stage -> control step
-at which it latched, stalled stage) and ``summary.md`` (the same as a table). Tasks already in
-``summary.json`` are skipped unless ``--force``, so an interrupted demo resumes.
+Two policies through ``realm eval``'s runner on a few tasks and perturbations: the scripted expert
+(privileged, solves the tasks) and a tiny randomly initialised LeRobot ACT policy made locally
+(``save_pretrained`` then loaded back by path: the LeRobot path end to end, no download). Writes
+``OUT/expert/`` and ``OUT/lerobot_tiny/`` (records.jsonl, metrics.json, report.html with figures
+and, unless ``--no-video``, exterior + wrist mp4s of the expert) and ``OUT/index.html`` linking both.
+Re-running resumes (finished episodes are skipped); a few minutes on 2 CPU cores.
 """
 
 from __future__ import annotations
 
-import json
-import time
+import os
 from pathlib import Path
 
 DEFAULT_OUT = Path("outputs/demo")
+DEMO_TASKS = ("REALM-PickApple-v1", "REALM-PushSwitch-v1")
+DEMO_PERTURBATIONS = ("Default", "V-AUG", "VB-POSE")
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("demo", help="run the scripted expert on REALM tasks; write videos + a progression table")
-    p.add_argument("--tasks", default="all", help="comma-separated env ids, or 'all' (default)")
-    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output directory (default {DEFAULT_OUT})")
-    p.add_argument("--seed", type=int, default=0, help="episode seed, integer (default 0)")
-    from realm_ms.rendering import SHADERS  # the one shader table
+    from realm_ms.validate import integer
 
-    p.add_argument("--shader", default="default", choices=SHADERS,
-                   help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
-    p.add_argument("--max-steps", type=int, default=300, help="control steps per episode (REALM: 800)")
-    p.add_argument("--no-video", action="store_true", help="skip the mp4 per task (faster)")
-    p.add_argument("--force", action="store_true", help="re-run tasks already in summary.json")
+    p = sub.add_parser("demo", help="quick REALM protocol run (expert + a tiny LeRobot policy) ending in an HTML report")
+    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output directory (default {DEFAULT_OUT})")
+    p.add_argument("--tasks", nargs="+", default=list(DEMO_TASKS), help=f"env ids (default {' '.join(DEMO_TASKS)})")
+    p.add_argument("--perturbations", nargs="+", default=list(DEMO_PERTURBATIONS),
+                   help="perturbation names; ones not registered in this checkout are skipped (default Default V-AUG VB-POSE)")
+    p.add_argument("--episodes", type=integer(1), default=1, help="episodes per (task, perturbation), >= 1 (default 1)")
+    p.add_argument("--max-steps", type=integer(1), default=200, help="control steps per expert episode (default 200; REALM: 800)")
+    p.add_argument("--workers", type=integer(1), default=None, help="worker processes (default: CPU cores)")
+    p.add_argument("--no-video", action="store_true", help="skip the expert's episode videos (faster)")
     p.set_defaults(func=run)
 
 
-def _tile(render_frame, sensor_frames):
-    import cv2
-    import numpy as np
-
-    top = render_frame
-    w = top.shape[1]
-    cams = [cv2.resize(f, (w // len(sensor_frames), int(w // len(sensor_frames) * f.shape[0] / f.shape[1]))) for f in sensor_frames]
-    h = min(c.shape[0] for c in cams)
-    row = np.concatenate([c[:h] for c in cams], axis=1)
-    row = np.pad(row, ((0, 0), (0, w - row.shape[1]), (0, 0)))
-    return np.concatenate([top, row], axis=0)
-
-
-def run_task(env_id: str, out: Path, seed: int, shader: str, max_steps: int, video: bool) -> dict:
-    import gymnasium as gym
-    import imageio.v2 as imageio
-
-    import realm_ms  # noqa: F401
-    from realm_ms.expert import make_expert
-
-    env = gym.make(
-        env_id,
-        obs_mode="rgb" if video else "state",
-        render_mode="rgb_array" if video else None,
-        shader=shader,
-        max_episode_steps=max_steps,
-    )
-    u = env.unwrapped
-    obs, info = env.reset(seed=seed)
-    expert = make_expert(env)
-    stages = list(u.tracker.stages)
-    latched: dict[str, int | None] = {s.value: None for s in stages}
-    frames = []
-    t0 = time.perf_counter()
-    steps = 0
-    for steps in range(1, max_steps + 1):
-        obs, _, term, trunc, info = env.step(expert.act(obs))
-        for s in stages:
-            if latched[s.value] is None and bool(info[f"stage_{s.value.lower()}"][0]):
-                latched[s.value] = steps
-        if video:
-            cams = [obs["sensor_data"][c]["rgb"][0].cpu().numpy() for c in ("exterior_1", "exterior_2", "wrist")]
-            frames.append(_tile(env.render()[0].cpu().numpy(), cams))
-        if bool(term[0]) or bool(trunc[0]):
-            break
-    result = {
-        "env_id": env_id,
-        "instruction": u.instruction,
-        "skill": u.task_spec.skill,
-        "seed": seed,
-        "progression": float(info["progression"][0]),
-        "success": bool(info["success"][0]),
-        "stalled_stage": u.stalled_stage()[0],
-        "stages_latched_at_step": latched,
-        "steps": steps,
-        "wall_s": round(time.perf_counter() - t0, 2),
-    }
-    if video:
-        path = out / f"{env_id}.mp4"
-        imageio.mimwrite(path, frames, fps=15, macro_block_size=8)
-        result["video"] = str(path)
-    env.close()
-    return result
-
-
-def _write_markdown(summary: dict, path: Path) -> None:
-    lines = ["| task | skill | progression | success | stalled at | steps | stages (step latched) |", "|---|---|---|---|---|---|---|"]
-    for r in summary.values():
-        st = ", ".join(f"{k}@{v}" if v is not None else f"{k}:-" for k, v in r["stages_latched_at_step"].items())
-        lines.append(f"| {r['env_id']} | {r['skill']} | {r['progression']:.2f} | {r['success']} | {r['stalled_stage']} | {r['steps']} | {st} |")
-    path.write_text("\n".join(lines) + "\n")
-
-
 def run(args) -> int:
-    from rich.progress import track
-
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
+    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval.policies.lerobot import make_tiny_policy
+    from realm_ms.eval.protocol import PRESETS, available_perturbations, canonical_perturbation
+    from realm_ms.eval.report import write_report
     from realm_ms.tasks import TASKS
 
-    env_ids = sorted(TASKS) if args.tasks == "all" else [t.strip() for t in args.tasks.split(",") if t.strip()]
-    unknown = [t for t in env_ids if t not in TASKS]
+    os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
+    unknown = [t for t in args.tasks if t not in TASKS]
     if unknown:
-        raise UserError(f"unknown task(s) {unknown}; available: {sorted(TASKS)}")
+        raise UserError(f"unknown task(s) {', '.join(unknown)}; known: {', '.join(sorted(TASKS))}")
+    avail = set(available_perturbations())
+    perts = []
+    for name in args.perturbations:
+        try:
+            c = canonical_perturbation(name)
+        except ValueError:
+            continue
+        if c in avail:
+            perts.append(c)
+    perts = perts or ["Default"]
     args.out.mkdir(parents=True, exist_ok=True)
-    summary_path = args.out / "summary.json"
-    summary = json.loads(summary_path.read_text()) if summary_path.exists() and not args.force else {}
-    todo = [t for t in env_ids if t not in summary]
-    for env_id in track(todo, description="demo episodes"):
-        summary[env_id] = run_task(env_id, args.out, args.seed, args.shader, args.max_steps, not args.no_video)
-        summary_path.write_text(json.dumps(summary, indent=2))  # incremental: an interrupted demo resumes
-        r = summary[env_id]
-        print(f"{env_id}: progression {r['progression']:.2f} success {r['success']} ({r['steps']} steps, {r['wall_s']} s)")
-    _write_markdown({k: summary[k] for k in env_ids}, args.out / "summary.md")
-    print((args.out / "summary.md").read_text())
-    print(f"videos and summary in {args.out}/")
+    proto = PRESETS["quick"].with_overrides(episodes=args.episodes, max_steps=args.max_steps)
+    print(f"realm demo: {len(args.tasks)} task(s) x {', '.join(perts)} x {args.episodes} episode(s)")
+    reports = []
+    evaluate("expert", args.tasks, perts, proto, args.out / "expert", workers=args.workers, videos="none" if args.no_video else "all")
+    reports.append(("scripted expert", write_report(args.out / "expert", args.out / "expert" / "report.html", videos="all")))
+    ckpt = args.out / "tiny_act"
+    if not (ckpt / "config.json").exists():
+        make_tiny_policy(ckpt)
+    tiny = proto.with_overrides(max_steps=min(args.max_steps, 60))
+    evaluate(f"lerobot:{ckpt}", args.tasks, perts, tiny, args.out / "lerobot_tiny", workers=args.workers, camera_size=(160, 90))
+    reports.append(("tiny LeRobot ACT (random init)", write_report(args.out / "lerobot_tiny", args.out / "lerobot_tiny" / "report.html")))
+    links = "".join(f'<li><a href="{p.relative_to(args.out)}">{name}</a></li>' for name, p in reports)
+    (args.out / "index.html").write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>realm demo</title></head>"
+                                         f"<body><h1>realm demo</h1><ul>{links}</ul></body></html>")
+    for name, p in reports:
+        print(f"{name}: {p}")
+    print(f"open {args.out / 'index.html'}")
     return 0

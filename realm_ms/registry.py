@@ -28,7 +28,10 @@ class Registry(Generic[T]):
         self._aliases: dict[str, str] = {}
 
     def register(self, name: str, entry: T | None = None, *, aliases: tuple[str, ...] = ()) -> T | Callable[[T], T]:
-        """``reg.register("x", obj)`` or ``@reg.register("x")``; a duplicate name is an error."""
+        """``reg.register("x", obj)`` or ``@reg.register("x")``; a duplicate name is an error.
+        Names are stored as ``str(name)`` (so a ``str`` enum member registers under its value)."""
+        name = str(name)
+        aliases = tuple(str(a) for a in aliases)
 
         def add(obj: T) -> T:
             for key in (name, *aliases):

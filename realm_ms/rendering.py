@@ -6,7 +6,7 @@ One place decides the shader config of every camera (both exterior cameras and t
 (path tracing, ManiSkill presets), ``minimal``.
 
 Denoiser (ray-tracing shaders only): ``auto`` probes, once per process, OptiX, then OIDN, on a tiny
-render in a child process and takes the first that really denoises (a probe frame must be
+render in a child process (``realm_ms/render_probe.py``) and takes the first that really denoises (a probe frame must be
 non-blank and differ from the undenoised frame: SAPIEN renders undenoised, or black, when a
 denoiser fails to initialise, and only logs the error); with no CUDA device it is ``none``. One
 warning names the choice. Forcing ``optix`` or ``oidn`` probes that one and raises
@@ -15,6 +15,7 @@ warning names the choice. Forcing ``optix`` or ``oidn`` probes that one and rais
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import functools
 import json
@@ -23,6 +24,7 @@ import subprocess
 import sys
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -89,7 +91,8 @@ def probe_denoiser(denoiser: str, timeout_s: float = 180.0) -> ProbeResult:
     _check_denoiser(denoiser)
     if denoiser in ("none", "auto"):
         raise ValueError("probe_denoiser checks 'optix' or 'oidn'")
-    cmd = [sys.executable, "-m", "realm_ms.rendering", "--probe", denoiser]
+    # run by path, not ``-m``: the child imports sapien only, not realm_ms/mani_skill (seconds saved)
+    cmd = [sys.executable, str(Path(__file__).with_name("render_probe.py")), denoiser]
     try:
         out = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, env=os.environ.copy())
     except subprocess.TimeoutExpired:
@@ -150,12 +153,53 @@ def camera_shader_config(shader: str = "default", denoiser: str = "auto"):
     cfg = copy.deepcopy(PREBUILT_SHADER_CONFIGS[shader])
     if is_ray_traced(shader):
         cfg.shader_pack_config["ray_tracing_denoiser"] = resolve_denoiser(denoiser)
+        if _RT_SPP_OVERRIDE:
+            cfg.shader_pack_config["ray_tracing_samples_per_pixel"] = _RT_SPP_OVERRIDE[-1]
     return cfg
+
+
+_RT_SPP_OVERRIDE: list[int] = []
+
+
+@contextlib.contextmanager
+def rt_samples_per_pixel(spp: int):
+    """Cap the samples per pixel of ray-traced cameras created inside the block (CPU previews,
+    tests); the path depth and denoiser stay those of the shader."""
+    if int(spp) < 1:
+        raise ValueError(f"samples per pixel must be >= 1, got {spp}")
+    _RT_SPP_OVERRIDE.append(int(spp))
+    try:
+        yield
+    finally:
+        _RT_SPP_OVERRIDE.pop()
 
 
 def shader_config(name: str, denoiser: str = "auto"):
     """Alias of :func:`camera_shader_config` (older call sites)."""
     return camera_shader_config(name, denoiser)
+
+
+@dataclass(frozen=True)
+class CameraSettings:
+    """What every REALM camera (exterior and wrist) renders: observation size in pixels, shader and
+    denoiser. One value configures all three cameras, so they can never disagree."""
+
+    width: int = 320
+    height: int = 180
+    shader: str = "default"
+    denoiser: str = "auto"
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 1 <= int(v) <= 8192:
+                raise ValueError(f"camera_{name} must be a whole number of pixels in 1..8192, got {v!r}")
+            object.__setattr__(self, name, int(v))
+        _check_shader(self.shader)
+        _check_denoiser(self.denoiser)
+
+    def shader_config(self):
+        return camera_shader_config(self.shader, self.denoiser)
 
 
 def light_gain(shader: str) -> float:
@@ -207,60 +251,3 @@ def frame_stats(img) -> tuple[float, float]:
 
 def is_blank(img, min_std: float = BLANK_STD) -> bool:
     return frame_stats(img)[1] < min_std
-
-
-def _probe_main(denoiser: str) -> None:
-    """Child-process side of :func:`probe_denoiser`: a box on a plane, 48x32, 2 spp."""
-    import sapien
-
-    sapien.render.set_camera_shader_dir("rt")
-    sapien.render.set_ray_tracing_samples_per_pixel(2)
-    sapien.render.set_ray_tracing_path_depth(2)
-    scene = sapien.Scene()
-    scene.set_ambient_light([0.3, 0.3, 0.3])
-    scene.add_directional_light([0.3, 0.4, -1], [1, 1, 1])
-    b = scene.create_actor_builder()
-    b.add_box_visual(half_size=[0.1, 0.1, 0.1], material=sapien.render.RenderMaterial(base_color=[0.8, 0.3, 0.2, 1]))
-    b.add_box_visual(pose=sapien.Pose([0, 0, -0.11]), half_size=[1, 1, 0.01], material=sapien.render.RenderMaterial(base_color=[0.6, 0.6, 0.6, 1]))
-    b.build_static()
-    frames = []
-    for den in ("none", denoiser):  # the denoiser is bound when a camera is created
-        sapien.render.set_ray_tracing_denoiser(den)
-        cam = scene.add_camera(f"probe_{den}", 48, 32, 1.0, 0.01, 10.0)
-        cam.entity.set_pose(sapien.Pose([-0.5, 0, 0.2], [0.9848, 0, 0.1736, 0]))
-        scene.update_render()
-        cam.take_picture()
-        frames.append(np.clip(cam.get_picture("Color")[..., :3], 0, 1) * 255.0)
-    print(json.dumps({"mean": float(frames[1].mean()), "std": float(frames[1].std()),
-                      "diff": float(np.abs(frames[1] - frames[0]).mean())}), flush=True)
-
-
-if __name__ == "__main__":
-    if len(sys.argv) == 3 and sys.argv[1] == "--probe":
-        _probe_main(sys.argv[2])
-    else:
-        raise SystemExit("usage: python -m realm_ms.rendering --probe {optix,oidn}")
-
-
-# ---------------------------------------------------------------------------------------- settings
-@dataclass(frozen=True)
-class CameraSettings:
-    """What every REALM camera (exterior and wrist) renders: observation size in pixels, shader and
-    denoiser. One value configures all three cameras, so they can never disagree."""
-
-    width: int = 320
-    height: int = 180
-    shader: str = "default"
-    denoiser: str = "auto"
-
-    def __post_init__(self) -> None:
-        for name in ("width", "height"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 1 <= int(v) <= 8192:
-                raise ValueError(f"camera_{name} must be a whole number of pixels in 1..8192, got {v!r}")
-            object.__setattr__(self, name, int(v))
-        _check_shader(self.shader)
-        _check_denoiser(self.denoiser)
-
-    def shader_config(self):
-        return camera_shader_config(self.shader, self.denoiser)

@@ -98,11 +98,17 @@ def test_replaying_stored_actions_reproduces_stored_states(exported):
 
 
 def test_rerun_resumes_without_duplicates(exported):
-    from realm_ms.lerobot.export import ExportConfig, export_dataset
+    from realm_ms.lerobot.export import SIDECAR, ExportConfig, export_dataset, read_sidecar
 
     cfg, _ = exported
+
+    # a kill during save_episode: the sidecar line was written, the episode never committed
+    ghost = dict(read_sidecar(cfg.out)[-1], seed=99, episode_index=len(TASKS) * EPISODES)
+    with open(cfg.out / SIDECAR, "a") as f:
+        f.write(json.dumps(ghost) + "\n")
     again = export_dataset(ExportConfig(out=cfg.out, tasks=TASKS, episodes=EPISODES, seed=3, width=W, height=H, max_steps=STEPS, progress=False))
     assert again["written"] == 0 and again["already"] == len(TASKS) * EPISODES
+    assert 99 not in {r["seed"] for r in read_sidecar(cfg.out)}
     assert _dataset(cfg).num_episodes == len(TASKS) * EPISODES
 
 
@@ -117,3 +123,25 @@ def test_bad_inputs_are_one_line_errors(exported, tmp_path):
     (tmp_path / "junk").mkdir()
     (tmp_path / "junk" / "file.txt").write_text("x")
     assert main(["export", "--tasks", TASKS[0], "--episodes", "1", "--out", str(tmp_path / "junk")]) == 2
+
+
+def test_export_of_a_realm_eval_run_resimulates_its_records(tmp_path):
+    """`realm export --from-eval RUN`: one dataset episode per record, same seed / steps / outcome."""
+    from realm_ms.cli import main
+
+    run, out = tmp_path / "run", tmp_path / "from_eval"
+    assert main(["eval", "--policy", "expert", "--tasks", TASKS[1], "--perturbations", "Default", "--episodes", "2",
+                 "--seed", "7", "--max-steps", "10", "--workers", "1", "--no-progress", "--no-quality", "--out", str(run)]) == 0
+    records = [json.loads(line) for line in (run / "records.jsonl").read_text().splitlines() if line.strip()]
+    assert main(["export", "--from-eval", str(run), "--out", str(out), "--width", str(W), "--height", str(H)]) == 0
+    from realm_ms.lerobot.export import read_sidecar
+
+    side = read_sidecar(out)
+    assert sorted((r["seed"], r["steps"], r["success"]) for r in side) == sorted((r["seed"], r["steps"], r["success"]) for r in records)
+    for rec in records:
+        mine = next(r for r in side if r["seed"] == rec["seed"])
+        assert abs(mine["progression"] - rec["progression"]) < 1e-6 and mine["policy"] == "expert"
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    ds = LeRobotDataset("realm/from_eval", root=out, video_backend="pyav")
+    assert ds.num_episodes == len(records) and ds.num_frames == sum(r["steps"] for r in records)

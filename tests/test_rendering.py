@@ -27,23 +27,15 @@ CONTRAST_TOL = (0.75, 1.33)
 def frames():
     """{shader: {camera: HxWx3 uint8}} of one task after reset (seed 0). ``rt`` keeps its path
     depth but renders 4 spp instead of 32 so the module stays within CI time on lavapipe."""
-    from mani_skill.render.shaders import PREBUILT_SHADER_CONFIGS
-
-    rt = PREBUILT_SHADER_CONFIGS["rt"].shader_pack_config
-    spp = rt["ray_tracing_samples_per_pixel"]
-    rt["ray_tracing_samples_per_pixel"] = 4
     out = {}
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            for shader in SHADERS:
-                env = gym.make(ENV, obs_mode="rgb", shader=shader, **SIZE)
-                obs, _ = env.reset(seed=0)
-                out[shader] = {cam: obs["sensor_data"][cam]["rgb"][0].cpu().numpy() for cam in obs["sensor_data"]}
-                out[shader + "/configs"] = {k: c.shader_config for k, c in env.unwrapped._sensor_configs.items()}
-                env.close()
-    finally:
-        rt["ray_tracing_samples_per_pixel"] = spp
+    with warnings.catch_warnings(), rendering.rt_samples_per_pixel(4):
+        warnings.simplefilter("ignore")
+        for shader in SHADERS:
+            env = gym.make(ENV, obs_mode="rgb", shader=shader, **SIZE)
+            obs, _ = env.reset(seed=0)
+            out[shader] = {cam: obs["sensor_data"][cam]["rgb"][0].cpu().numpy() for cam in obs["sensor_data"]}
+            out[shader + "/configs"] = {k: c.shader_config for k, c in env.unwrapped._sensor_configs.items()}
+            env.close()
     return out
 
 

@@ -63,8 +63,11 @@ def test_npz_round_trip_and_directory_layouts(tmp_path):
     write_npz(tmp_path / "s" / "heldout" / "b.npz", traj(name="b"))
     tr, he = load_split(tmp_path / "s")
     assert [t.name for t in tr] == ["a"] and [t.name for t in he] == ["b"]
+    # synth's layout read whole (what `compare` does): train then held-out
+    assert [t.name for t in load_dir(tmp_path / "s")] == ["a", "b"]
+    (tmp_path / "empty").mkdir()
     with pytest.raises(DataError, match="no .npz"):
-        load_dir(tmp_path / "s")
+        load_dir(tmp_path / "empty")
     np.savez(tmp_path / "bad.npz", t=np.arange(30) / 15.0, q=np.zeros((30, 7)))
     with pytest.raises(DataError, match="missing key"):
         load_dir(tmp_path / "bad.npz")

@@ -120,10 +120,17 @@ class RobotModel:
             except (KeyError, ValueError, TypeError) as e:
                 msg = e.args[0] if isinstance(e, KeyError) and e.args else e
                 raise ValueError(f"{where}: effects[{i}]: {msg}") from None
+        from realm_ms.agents.droid_controller import GAIN_PRESETS, JOINT_PHYSICS_PRESETS
+
+        presets = {}
+        for key, table, default in (("gains", GAIN_PRESETS, "polymetis"), ("joint_physics", JOINT_PHYSICS_PRESETS, "none")):
+            presets[key] = str(data.get(key, default))
+            if presets[key] not in table:
+                raise ValueError(f"{where}: {key}: unknown preset {presets[key]!r}; choose one of {', '.join(sorted(table))}")
         return cls(
             effects,
-            gains=str(data.get("gains", "polymetis")),
-            joint_physics=str(data.get("joint_physics", "none")),
+            gains=presets["gains"],
+            joint_physics=presets["joint_physics"],
             physics_hz=check_physics_hz(data.get("physics_hz", 120.0), f"{where}: physics_hz"),
             provenance=dict(data.get("provenance") or {}),
         )

@@ -178,5 +178,9 @@ def load_catalog(path: str | Path | None = None) -> BuiltCatalog | ProceduralCat
 def get_object_spec(oid: str, catalog: BuiltCatalog | ProceduralCatalog | str | Path | None = None) -> ObjectSpec:
     if oid.startswith("proc/") and catalog is None:
         return procedural_spec(oid)
+    if oid.startswith("real/"):  # default-installed real meshes for task nouns (procedural fallback)
+        from realm_ms.assets.real_objects import real_object_spec
+
+        return real_object_spec(oid)
     cat = catalog if isinstance(catalog, (BuiltCatalog, ProceduralCatalog)) else load_catalog(catalog)
     return cat.get(oid)

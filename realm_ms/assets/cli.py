@@ -54,7 +54,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _build(args: argparse.Namespace) -> int:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
 
     from asset_pipeline.build import SourceUnavailable, build_catalog, default_sources
     from asset_pipeline.config import BuildConfig
@@ -93,7 +93,7 @@ def _build(args: argparse.Namespace) -> int:
 
 
 def _stats(args: argparse.Namespace) -> int:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
 
     from asset_pipeline.record import CATALOG_FILE, read_catalog
     from asset_pipeline.stats import catalog_stats, contact_sheet

@@ -1,8 +1,11 @@
-"""Fixed procedural ids for the objects REALM's tasks name, with sizes from the original configs."""
+"""Object ids for the nouns REALM's tasks name, with sizes from the original configs / real objects.
+
+``real/<name>`` ids are real, textured meshes from default-installed packages
+(``realm_ms.assets.real_objects``; procedural fallback when missing); the rest are procedural."""
 
 from __future__ import annotations
 
-from realm_ms.assets.catalog import procedural_spec
+from realm_ms.assets.catalog import get_object_spec
 from realm_ms.assets.spec import ObjectSpec
 
 # noun -> procedural id; sizes (largest extent, m) follow the REALM task configs / real objects.
@@ -12,7 +15,7 @@ TASK_OBJECTS: dict[str, str] = {
     "blue cube": "proc/cube/0?color=blue&size=0.03",
     "orange cube": "proc/cube/0?color=orange&size=0.03",
     "red cube": "proc/cube/0?color=red&size=0.03",
-    "bowl": "proc/bowl/0?color=white&size=0.2",
+    "bowl": "real/bowl",
     "tray": "proc/tray/0?color=brown&size=0.35",
     "box": "proc/box/0?color=brown",
     "banana": "proc/banana/0",
@@ -33,7 +36,7 @@ TASK_OBJECTS: dict[str, str] = {
     "lid": "proc/lid/0",
     "plate": "proc/plate/0?color=white",
     "frying pan": "proc/frying_pan/0?color=black",
-    "apple": "proc/apple/0?color=red",
+    "apple": "real/apple",
     "corkscrew": "proc/corkscrew/0",
     "knife": "proc/knife/0",
     "fork": "proc/fork/0",
@@ -48,6 +51,7 @@ TASK_OBJECTS: dict[str, str] = {
 
 def task_object_spec(noun: str) -> ObjectSpec:
     try:
-        return procedural_spec(TASK_OBJECTS[noun])
+        oid = TASK_OBJECTS[noun]
     except KeyError:
         raise KeyError(f"no task object {noun!r}; known: {sorted(TASK_OBJECTS)}") from None
+    return get_object_spec(oid)

@@ -27,7 +27,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, help="base seed; episode i uses seed + i (REALM: 1234)")
     p.add_argument("--max-steps", type=int, help="control steps per episode (REALM: 800)")
     p.add_argument("--replan-every", type=int, help="actions executed open-loop per policy call (REALM: 8)")
-    p.add_argument("--workers", type=int, default=None, help="parallel env processes (default: CPU cores, at most 16)")
+    from realm_ms.validate import integer
+
+    p.add_argument("--workers", type=integer(1), default=None, help="parallel env processes, >= 1 (default: CPU cores, at most 16)")
     p.add_argument("--backend", choices=("auto", "cpu", "gpu"), default="auto", help="gpu = ManiSkill GPU simulation (needs SAPIEN GPU PhysX)")
     p.add_argument("--ray-address", default=None, help="shard cells over Ray: 'local', 'auto' or ray://HOST:PORT")
     p.add_argument("--camera-size", default=None, help="WxH of the observed camera frames (default 320x180)")
@@ -36,11 +38,11 @@ def add_parser(sub) -> None:
     p.add_argument("--openpi-wait", type=float, default=30.0, help="seconds to retry a down openpi server before failing the episode")
     p.add_argument("--device", default="cpu", help="torch device for LeRobot policies")
     p.add_argument("--no-quality", action="store_true", help="skip trajectory-quality metrics (contacts walk per step)")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--out", type=Path, help="run directory (records.jsonl, metrics.json)")
     rsub = p.add_subparsers(dest="eval_command", metavar="report")
     r = rsub.add_parser("report", help="HTML report (+ PNGs, markdown/CSV table) of a run directory")
-    r.add_argument("run_dir", type=Path)
+    r.add_argument("run_dir", type=Path, help="run directory written by `realm eval`")
     r.add_argument("--out", dest="report_out", type=Path, default=None, help="HTML file (default RUN/report.html)")
     r.add_argument("--videos", dest="report_videos", choices=("none", "failures", "all"), default="failures", help="which episode videos to link")
     r.add_argument("--reference", default=None, help="also tabulate REALM's paper numbers for a policy (pi0, pi0-FAST, GR00T)")
@@ -48,7 +50,7 @@ def add_parser(sub) -> None:
 
 
 def _parse_size(text: str | None) -> tuple[int, int] | None:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
 
     if not text:
         return None
@@ -63,7 +65,7 @@ def _parse_size(text: str | None) -> tuple[int, int] | None:
 
 def resolve(args):
     """(protocol, tasks, perturbations) from the preset and flags, validated with clear errors."""
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
     from realm_ms.eval.protocol import available_perturbations, canonical_perturbation
     from realm_ms.tasks import TASKS
 
@@ -95,7 +97,7 @@ def resolve(args):
 
 
 def run(args) -> int:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
 
     if args.eval_command == "report":
         return run_report(args)
@@ -116,7 +118,7 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
              ray_address: str | None = None, camera_size=None, videos: str = "none", quality: bool = True,
              progress: bool = True, policy_options: dict | None = None, env_kwargs: dict | None = None, quiet: bool = False) -> int:
     """Programmatic ``realm eval`` (used by the CLI, the demo and the expert bench)."""
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
     from realm_ms.eval.metrics import compute_metrics
     from realm_ms.eval.policies import make_policy
     from realm_ms.eval.protocol import plan
@@ -179,7 +181,7 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
 
 
 def run_report(args) -> int:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
     from realm_ms.eval.report import write_report
 
     if not (args.run_dir / "records.jsonl").exists():

@@ -107,7 +107,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
 
     if not args.paired.is_file():
         raise UserError(f"no such file: {args.paired}")

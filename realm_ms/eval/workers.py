@@ -166,15 +166,11 @@ class ProcessBackend:
         return self.cells[slot]
 
     def _attach(self, i: int, name: str, layout: list) -> None:
-        from multiprocessing import resource_tracker
-
         if self.shms[i] is not None:
             self.shms[i].close()
+        # the worker owns (and unlinks) the block; spawned workers share our resource tracker, which
+        # also cleans it up if a worker is killed
         shm = shared_memory.SharedMemory(name=name)
-        try:  # the worker owns (and unlinks) the block; do not let our tracker unlink it too
-            resource_tracker.unregister(shm._name, "shared_memory")
-        except Exception:
-            pass
         self.shms[i] = shm
         self.views[i] = {k: np.ndarray(shape, dtype=dtype, buffer=shm.buf, offset=off) for k, shape, dtype, off in layout}
 

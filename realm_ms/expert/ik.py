@@ -15,7 +15,7 @@ import math
 import torch
 
 from realm_ms.agents.panda_droid import droid_arm_model
-from realm_ms.tasks.progression import quat_to_matrix
+from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
 
 # a comfortable posture for null-space bias (DROID reset pose)
 REST_Q = (0.0, -math.pi / 5, 0.0, -4 * math.pi / 5, 0.0, 3 * math.pi / 5, 0.0)
@@ -23,7 +23,7 @@ REST_Q = (0.0, -math.pi / 5, 0.0, -4 * math.pi / 5, 0.0, 3 * math.pi / 5, 0.0)
 
 def pose_matrix(p: torch.Tensor, q_wxyz: torch.Tensor) -> torch.Tensor:
     t = torch.eye(4, dtype=p.dtype, device=p.device).repeat(p.shape[0], 1, 1)
-    t[:, :3, :3] = quat_to_matrix(q_wxyz)
+    t[:, :3, :3] = quaternion_to_matrix(q_wxyz)
     t[:, :3, 3] = p
     return t
 

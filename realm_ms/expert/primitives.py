@@ -57,10 +57,10 @@ class Ctx:
 
     def obj_pose(self, obj) -> tuple[np.ndarray, np.ndarray]:
         """Object origin (base frame) and its 3x3 rotation."""
-        from realm_ms.tasks.progression import quat_to_matrix
+        from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
 
         pose = obj.pose
-        return self.to_base(pose.p), quat_to_matrix(pose.q[self.i : self.i + 1])[0].cpu().numpy().astype(float)
+        return self.to_base(pose.p), quaternion_to_matrix(pose.q[self.i : self.i + 1])[0].cpu().numpy().astype(float)
 
 
 def obj_yaw(r: np.ndarray) -> float:

@@ -38,7 +38,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
     from realm_ms.lerobot.export import ExportConfig, ExportError, export_dataset, export_eval_run
     from realm_ms.registry import UnknownNameError
 

@@ -23,6 +23,7 @@ from realm_ms.lerobot.features import DEFAULT_SIZE, FPS, ROBOT_TYPE, dataset_fea
 from realm_ms.lerobot.rollout import DEFAULT_PERTURBATION
 
 SIDECAR = "meta/realm_episodes.jsonl"
+VIDEO_BACKEND = "pyav"  # decoding backend recorded on the writer; also skips torchcodec's noisy probe
 
 
 class ExportError(ValueError):
@@ -70,7 +71,7 @@ class EpisodeRecord:
     success: bool
     kept: bool
     episode_index: int | None = None  # index in the dataset when kept
-    params: dict | None = None  # the perturbation's drawn parameters, when the env exposes them
+    params: list | None = None  # the drawn perturbation parameters per sub-env (info["perturbation"]["params"])
 
 
 def read_sidecar(root: Path) -> list[dict]:
@@ -120,7 +121,11 @@ class _Writer:
     """A LeRobotDataset opened for writing (created or resumed) with periodic commits."""
 
     def __init__(self, cfg: ExportConfig):
+        import os
+
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+        os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 prints its whole config per video otherwise
 
         self.cfg = cfg
         self._cls = LeRobotDataset
@@ -128,7 +133,7 @@ class _Writer:
         info = self.root / "meta" / "info.json"
         if info.exists():
             self._check_compatible(json.loads(info.read_text()))
-            self.ds = LeRobotDataset.resume(cfg.repo_id, root=self.root)
+            self.ds = LeRobotDataset.resume(cfg.repo_id, root=self.root, video_backend=VIDEO_BACKEND)
             self.ds.clear_episode_buffer(delete_images=True)  # leftovers of an interrupted episode
         else:
             if self.root.exists():
@@ -137,7 +142,7 @@ class _Writer:
                 self.root.rmdir()  # LeRobot creates the root itself
             self.ds = LeRobotDataset.create(
                 cfg.repo_id, fps=FPS, features=dataset_features(cfg.width, cfg.height), root=self.root,
-                robot_type=ROBOT_TYPE, use_videos=True,
+                robot_type=ROBOT_TYPE, use_videos=True, video_backend=VIDEO_BACKEND,
             )
         self.pending = 0
 
@@ -171,7 +176,7 @@ class _Writer:
         if self.pending == 0:
             return
         self.ds.finalize()
-        self.ds = self._cls.resume(self.cfg.repo_id, root=self.root)
+        self.ds = self._cls.resume(self.cfg.repo_id, root=self.root, video_backend=VIDEO_BACKEND)
         self.pending = 0
 
     def close(self) -> None:

@@ -20,10 +20,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     sh = sub.add_parser("sheet", help="one image per perturbation (exterior + wrist camera) for a task")
     sh.add_argument("--task", action="append", required=True, help="env id (repeat for several; 'all' for every task)")
     sh.add_argument("--out", required=True, help="PNG path (with several tasks: one file per task, the id appended)")
-    sh.add_argument("--seed", type=int, default=0)
-    sh.add_argument("--width", type=int, default=320)
-    sh.add_argument("--height", type=int, default=180)
-    sh.add_argument("--shader", default="default")
+    sh.add_argument("--seed", type=int, default=0, help="seed of the perturbation draws, integer (default 0)")
+    sh.add_argument("--width", type=int, default=320, help="image width per tile in pixels (default 320)")
+    sh.add_argument("--height", type=int, default=180, help="image height per tile in pixels (default 180)")
+    sh.add_argument("--shader", default="default", help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
     sh.set_defaults(func=_sheet)
     p.set_defaults(func=lambda a: (p.print_help(), 2)[1])
 
@@ -47,7 +47,7 @@ def _list(args) -> int:
 
 
 def _sheet(args) -> int:
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
 
     import realm_ms
 

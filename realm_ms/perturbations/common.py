@@ -20,8 +20,18 @@ TARGET_NOUNS = {"REALM-PutBananaInBox-v1": "box"}
 
 # where added objects (clutter, receivers) may go: the table area the arm reaches top-down
 WIDE_REGION = (0.30, 0.80, -0.42, 0.42)
+
+
+def widened(spec: TaskSpec) -> TaskSpec:
+    """The spec with its spawn region grown to at least ``WIDE_REGION``: added objects need room
+    (REALM over-subscribed its spawn box and dropped objects from above)."""
+    x0, x1, y0, y1 = spec.spawn_region
+    w = WIDE_REGION
+    return replace(spec, spawn_region=(min(x0, w[0]), max(x1, w[1]), min(y0, w[2]), max(y1, w[3])))
+
+
 GRIPPER_OPENING = 0.085  # m, Robotiq 2F-85
-GRASPABLE_WIDTH = 0.07  # m: the narrower horizontal extent must leave the fingers some room
+GRASPABLE_WIDTH = 0.075  # m: the narrower horizontal extent must leave the fingers some room
 
 
 def slot_noun(obj: SceneObject) -> str:
@@ -65,7 +75,7 @@ def cap_scale(asset: str, max_extent: float, scale=(1.0, 1.0, 1.0)) -> tuple[flo
 def graspable(extents) -> bool:
     """A top-down two-finger grasp fits across the narrower horizontal side."""
     e = np.asarray(extents, float)
-    return float(min(e[0], e[1])) <= GRASPABLE_WIDTH and float(e[2]) >= 0.012
+    return float(min(e[0], e[1])) <= GRASPABLE_WIDTH and float(e[2]) >= 0.005
 
 
 def sample_ids(rng: np.random.Generator, n: int, **filters) -> list[str]:

@@ -9,8 +9,10 @@ Here: the noun is the task author's name for the object ("can of soda", "blue bl
 bare category; only objects the skill can act on are candidates (graspable for pick / rotate; for
 put also small enough for the receptacle; for stack at most 5 cm, so it can rest on the 3 cm
 block); the main and the chosen distractor swap assets (slots keep their names, so sub-envs with
-different picks stay one batched actor). Drawers: the middle or bottom drawer (always another
-drawer than the default's). Push: a second switch (another model) is added and becomes the one to
+different picks stay one batched actor). Drawers: REALM's {middle, top}, on a cabinet whose handles
+are staggered sideways (top-down, a lower handle is otherwise under the one above it and no
+gripper reaches it; the bottom drawer's handle, 5 cm above the table, is left out for the same
+reason). Push: a second switch (another model) is added and becomes the one to
 push, the light switch stays as a distractor.
 """
 
@@ -24,7 +26,7 @@ from realm_ms.perturbations.base import Perturbation
 from realm_ms.perturbations.common import graspable, main_noun, object_spec, replace_noun, set_query, slot_noun, with_object
 from realm_ms.tasks.spec import SceneObject
 
-DRAWERS = ("middle", "bottom")
+DRAWERS = ("middle", "top")
 SWITCH_LOOKS = {1: "black switch", 2: "red switch", 3: "blue switch"}
 STACKABLE_MAX = 0.05  # m
 
@@ -51,7 +53,7 @@ class SbNoun(Perturbation):
     name = "SB-NOUN"
     reconfigure = True
     acts_on = "which object is manipulated (+ the instruction noun); drawers: which drawer; push: which switch"
-    ranges = "uniform among the scene's objects the skill can act on; drawers {middle, bottom}; push: 1 of 3 switch models"
+    ranges = "uniform among the scene's objects the skill can act on; drawers {middle, top}; push: 1 of 3 switch models"
 
     def draw(self, rng, ctx):
         spec = ctx.spec
@@ -70,7 +72,7 @@ class SbNoun(Perturbation):
         main = spec.main
         if "drawer" in params:
             text = spec.instruction.replace("top", params["drawer"], 1)
-            return replace(with_object(spec, main.name, asset=set_query(main.asset, drawer=params["drawer"])), instruction=text)
+            return replace(with_object(spec, main.name, asset=set_query(main.asset, drawer=params["drawer"], stagger=1)), instruction=text)
         if "look" in params:
             text = replace_noun(spec.instruction, main_noun(spec), params["noun"])
             old = replace(main, name=f"{main.name}_0", role="distractor")

@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from realm_ms.perturbations.base import Perturbation
-from realm_ms.perturbations.common import WIDE_REGION, cap_scale, main_noun, sample_ids, set_query, target_noun, with_object
+from realm_ms.perturbations.common import WIDE_REGION, cap_scale, widened, main_noun, sample_ids, set_query, target_noun, with_object
 from realm_ms.tasks.spec import SceneObject
 
 VERBS = {
@@ -85,6 +85,7 @@ class SbVrb(Perturbation):
                 objs = [replace(o, asset=params["receiver"], scale=tuple(params["receiver_scale"])) if o.name == t.name else o for o in objs]
             else:
                 objs.append(SceneObject("receiver", params["receiver"], role="target", region=WIDE_REGION, scale=tuple(params["receiver_scale"])))
+                spec = widened(spec)
             from realm_ms.perturbations.common import object_spec
 
             y = object_spec(params["receiver"]).noun

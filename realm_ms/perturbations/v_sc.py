@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from realm_ms.perturbations.base import Perturbation
-from realm_ms.perturbations.common import WIDE_REGION, cap_scale, categories_of, object_spec, sample_ids
+from realm_ms.perturbations.common import WIDE_REGION, cap_scale, widened, categories_of, object_spec, sample_ids
 from realm_ms.tasks.spec import SceneObject
 
 N_EXTRA = 3
@@ -55,7 +55,7 @@ class VSc(Perturbation):
         for k, a in enumerate(params["extras"]):
             region = DRAWER_SIDES[k % 2] if drawer else WIDE_REGION
             objs.append(SceneObject(f"clutter_{k}", a, region=region, scale=cap_scale(a, MAX_EXTENT)))
-        return replace(spec, objects=tuple(objs))
+        return replace(widened(spec), objects=tuple(objs))
 
 
 def seen_themes() -> tuple[str, ...]:

@@ -3,7 +3,7 @@
 REALM: s1, s2, s3 ~ U(0.5, 1.5), rejected until s1 s2 s3 <= 1.5; dataset objects get
 ``bbox = clip(bbox_orig * s, 0.02, 0.175)`` m, anchored on the config bbox (no compounding).
 Added (documented): for skills that grasp, draws whose narrower horizontal side exceeds what the
-2F-85 can close around (7 cm) are rejected too (REALM could make an object nobody can pick up).
+2F-85 can close around (7.5 cm) are rejected too (REALM could make an object nobody can pick up).
 REALM left drawers and the switch out; here the cabinet's carcass is scaled per axis (dimensions
 clipped to [0.25, 0.55] m, the analogue of REALM's planned [0.4, 0.75] m for its larger cabinet)
 and the switch housing + rocker likewise (clipped to x0.6 .. x1.6 of the nominal).

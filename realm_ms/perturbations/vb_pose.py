@@ -19,7 +19,7 @@ import torch
 
 from realm_ms.perturbations.base import Perturbation, as_float
 from realm_ms.tasks.placement import sample_placements
-from realm_ms.tasks.progression import quat_to_matrix
+from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
 
 YAW_STD = 3.14
 GROW = 0.08  # m added to each side of the main object's region
@@ -35,7 +35,7 @@ def grown_region(region) -> tuple[float, float, float, float]:
 
 
 def current_yaw(q: torch.Tensor) -> torch.Tensor:
-    r = quat_to_matrix(q)
+    r = quaternion_to_matrix(q)
     return torch.atan2(r[..., 1, 0], r[..., 0, 0])
 
 

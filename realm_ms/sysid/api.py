@@ -87,8 +87,6 @@ def excite(out: str | Path, n: int = 10, seed: int = 0, **config) -> list[Path]:
 
 def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, rate_hz: float = 15.0,
           workers: int | None = 1, **config) -> dict:
-    from realm_ms.sysid.synth import SynthConfig, synth as _synth
-
     check_int(seed, "seed (--seed)", minimum=0)
     check_non_negative(noise_rad, "noise_rad (--noise)", "rad")
     rate = check_positive(rate_hz, "rate_hz (--rate)", "Hz")
@@ -103,6 +101,8 @@ def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, 
         raise InputError(f"duration_s (--duration): {duration:g} s is too short; every trajectory needs >= "
                          f"{MIN_SYNTH_DURATION_S:g} s (1 s burn-in + scored time) and >= {MIN_SAMPLES} samples "
                          f"(at {rate:g} Hz: >= {max(MIN_SYNTH_DURATION_S, (MIN_SAMPLES - 1) / rate):.3g} s)")
+    from realm_ms.sysid.synth import SynthConfig, synth as _synth  # after the checks: fail fast
+
     return _synth(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config))
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 
 def _user_error(msg: str):
-    from realm_ms.cli import UserError
+    from realm_ms.errors import UserError
 
     return UserError(msg)
 
@@ -118,7 +118,7 @@ def _synth(args) -> int:
     with _user_input():
         info = api.synth(args.hidden, args.out, seed=args.seed, noise_rad=args.noise, rate_hz=args.rate,
                          n_train=args.n_train, n_heldout=args.n_heldout, duration_s=args.duration,
-                         control_hz=args.control_hz)
+                         control_hz=args.control_hz, engine=args.engine)
     print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {args.out} "
           f"(hidden: {info['hidden']}; truth in truth.yaml)")
     return 0
@@ -257,6 +257,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--n-heldout", type=integer(1), default=3, help="held-out trajectories, integer >= 1 (default 3)")
     s.add_argument("--duration", type=positive("s"), default=10.0,
                    help="seconds per trajectory, >= 2 s (default 10)")
+    s.add_argument("--engine", choices=("physx", "mujoco"), default="physx",
+                   help="physx: the replay simulator itself; mujoco: the independent reference (same URDF and "
+                        "law at 1 kHz in MuJoCo; needs `pip install mujoco`)")
     s.set_defaults(func=_synth)
 
     s = sub.add_parser("compare", help="replay DATA in simulation: per-joint error and noise floor")

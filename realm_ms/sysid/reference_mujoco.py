@@ -61,7 +61,7 @@ def build_model(config: MujocoConfig | None = None, urdf: str | None = None):
     if config.free_joints is not None:
         for k, j in enumerate(list(spec.joints)):
             if k not in config.free_joints:
-                j.delete()
+                spec.delete(j)
     m = spec.compile()
     m.opt.timestep = 1.0 / (config.law_hz * config.substeps)
     m.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER

@@ -4,6 +4,8 @@
 with the hidden effect(s) added to the default robot, samples the joint positions at ``rate_hz``
 (``control_hz`` targets held in between), adds Gaussian sensor noise, and writes ``train/`` and
 ``heldout/`` npz directories plus ``truth.yaml`` (the hidden model) and ``synth.json``.
+``engine="mujoco"`` simulates the truth with the independent MuJoCo reference instead
+(``reference_mujoco.py``: same URDF and law, 1 kHz controller on a converged plant).
 Each trajectory starts with 1 s of settling at its first target that is cut off.
 """
 
@@ -33,6 +35,7 @@ class SynthConfig:
     duration_s: float = 10.0
     physics_hz: float = 120.0
     gains: str = "polymetis"
+    engine: str = "physx"  # "physx" (the replay simulator) or "mujoco" (the independent reference)
     excite: ExciteConfig = field(default_factory=ExciteConfig)
 
 
@@ -52,7 +55,7 @@ def simulate_trajectories(model: RobotModel, commands: list[np.ndarray], control
     from realm_ms.sysid.replay import held_commands
 
     ev = evaluator or Evaluator(SimConfig.from_model(model), workers=1, device="cpu")
-    dt = 1.0 / model.physics_hz
+    dt = 1.0 / getattr(ev, "physics_hz", model.physics_hz)  # the MuJoCo reference runs at its law rate
     logs = []
     for c in commands:
         duration = (len(c) - 1) / control_hz
@@ -76,6 +79,20 @@ def simulate_trajectories(model: RobotModel, commands: list[np.ndarray], control
     return out
 
 
+def reference_engine(model: RobotModel):
+    """The MuJoCo reference for ``model``: the independent law when no effect is hidden, else
+    realm-ms's driver (the hidden effects are its actuation stages) on the MuJoCo plant."""
+    try:
+        from realm_ms.sysid.reference_mujoco import MujocoConfig, MujocoReference
+        import mujoco  # noqa: F401
+    except ImportError as e:  # pragma: no cover - depends on the install
+        from realm_ms.validate import InputError
+
+        raise InputError("engine 'mujoco' needs the mujoco package: pip install mujoco") from e
+    law = "driver" if model.actuation().stages else "mujoco"
+    return MujocoReference(MujocoConfig(gains=model.gains, joint_physics=model.joint_physics, law=law))
+
+
 def synth(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None, evaluator=None) -> dict:
     cfg = cfg or SynthConfig()
     cfg.hidden = hidden
@@ -83,6 +100,10 @@ def synth(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None, eval
     ecfg = ExciteConfig(**{**asdict(cfg.excite), "duration_s": cfg.duration_s, "control_hz": cfg.control_hz})
     n = cfg.n_train + cfg.n_heldout
     commands = excite(n, cfg.seed, ecfg)
+    if cfg.engine not in ("physx", "mujoco"):
+        raise ValueError(f"engine must be 'physx' or 'mujoco', got {cfg.engine!r}")
+    if cfg.engine == "mujoco" and evaluator is None:
+        evaluator = reference_engine(model)
     sims = simulate_trajectories(model, commands, cfg.control_hz, cfg.rate_hz, evaluator)
     rng = np.random.default_rng(cfg.seed + 1_000_003)
     out = Path(out_dir)
@@ -95,6 +116,6 @@ def synth(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None, eval
         split = "train" if i < cfg.n_train else "heldout"
         write_npz(out / split / f"traj_{i:03d}.npz", Trajectory(f"traj_{i:03d}", t, noisy, q_cmd, control_hz=cfg.control_hz))
     model.save(out / "truth.yaml")
-    info = {"hidden": hidden, "truth": model.params(), "config": asdict(cfg)}
+    info = {"hidden": hidden, "engine": cfg.engine, "truth": model.params(), "config": asdict(cfg)}
     (out / "synth.json").write_text(json.dumps(info, indent=2, default=float))
     return info

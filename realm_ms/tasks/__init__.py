@@ -14,4 +14,7 @@ from realm_ms.tasks import (  # noqa: F401
     rotate_mug,
     stack_cubes,
 )
-from realm_ms.tasks.spec import TASKS, SceneObject, TaskSpec, register_task  # noqa: F401
+from realm_ms.tasks.config import RealmEnvConfig, make_env  # noqa: F401
+from realm_ms.tasks.env import RealmEnv, register_task  # noqa: F401
+from realm_ms.tasks.skills import Skill  # noqa: F401
+from realm_ms.tasks.spec import TASKS, SceneObject, TaskSpec  # noqa: F401

@@ -4,7 +4,8 @@ Same cabinet as REALM-OpenDrawer-v1; the top drawer starts fully open (REALM's
 ``INIT_OPENNESS_FRACTION = 1.0``).
 """
 
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-CloseDrawer-v1",

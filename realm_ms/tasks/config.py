@@ -41,6 +41,11 @@ class RealmEnvConfig:
     settle_steps: int = 5  # control steps before the object reference is captured (REALM's warm-up)
     success_tail: int = 15  # steps after success before ``terminated``
     thresholds: Thresholds = field(default_factory=Thresholds)
+    # Rebuild the PhysX scene at each reset after simulated steps (CPU backend), so an episode
+    # depends only on its seed: PhysX keeps contact history across teleports (pair caches, pair
+    # order), and a reused scene can drift ~1e-2 rad from a fresh one after a contact-rich
+    # episode. Costs one scene build per reset (bench/reset_cost.py); False teleports objects.
+    isolate_episodes: bool = True
     obs_mode: str = "state"
     control_mode: str = "droid_joint_pos"
     num_envs: int = 1
@@ -126,6 +131,7 @@ KWARG_FIELDS: dict[str, tuple[str, str]] = {
     "settle_steps": ("top", "settle_steps"),
     "success_tail": ("top", "success_tail"),
     "thresholds": ("top", "thresholds"),
+    "isolate_episodes": ("top", "isolate_episodes"),
 }
 
 

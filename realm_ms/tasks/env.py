@@ -14,6 +14,7 @@ Episode protocol (REALM, with its pitfalls fixed):
 from __future__ import annotations
 
 import dataclasses
+import sys
 import warnings
 from typing import Any
 
@@ -33,7 +34,7 @@ from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
 from realm_ms.tasks.scenes import get_scene
 from realm_ms.tasks.config import RealmEnvConfig, _control_fields
-from realm_ms.tasks.spec import CameraSpec, TaskSpec
+from realm_ms.tasks.spec import TASKS, CameraSpec, TaskSpec
 
 def resolve_perturbations(spec):
     """The env's perturbation set; ``realm_ms.perturbations`` installs the resolver (tasks sit below it)."""
@@ -71,7 +72,7 @@ PERTURBATION_RESOLVER = None  # set by realm_ms.perturbations: spec -> Perturbat
 
 
 class RealmEnv(BaseEnv):
-    """Base of all REALM-* envs. Subclasses only set ``task_spec`` (see ``spec.register_task``)."""
+    """Base of all REALM-* envs. Subclasses only set ``task_spec`` (see ``register_task`` below)."""
 
     task_spec: TaskSpec
     SUPPORTED_ROBOTS = ["panda_droid"]
@@ -137,7 +138,9 @@ class RealmEnv(BaseEnv):
             sim_freq=120,
             control_freq=15,
             spacing=10,
-            scene_config=SceneConfig(solver_position_iterations=15, solver_velocity_iterations=1),
+            # sleep_threshold 0: PhysX's sleep state survives a teleport and a wake-up, so a body that
+            # slept in one episode settles differently in the next; nothing ever sleeps instead
+            scene_config=SceneConfig(solver_position_iterations=15, solver_velocity_iterations=1, sleep_threshold=0.0),
             gpu_memory_config=GPUMemoryConfig(max_rigid_contact_count=2**20, max_rigid_patch_count=2**18, found_lost_pairs_capacity=2**25),
         )
 
@@ -337,6 +340,8 @@ class RealmEnv(BaseEnv):
         self.perturbations.override = options.get("perturbation_params")
         if self.perturbations.needs_reconfigure or (was and not self.perturbations.needs_reconfigure and "perturbation" in options):
             options["reconfigure"] = True  # scene-changing draws rebuild the scene every reset
+        if self.config.isolate_episodes and self._contacts_dirty and not self.gpu_sim_enabled and "env_idx" not in options:
+            options["reconfigure"] = True  # a new PhysX scene: see RealmEnvConfig.isolate_episodes
         self._pert_fresh = False
         obs, info = super().reset(seed=seed, options=options)
         self.perturbations.override = None
@@ -405,3 +410,27 @@ class RealmEnv(BaseEnv):
 
     def compute_sparse_reward(self, obs, action, info):
         return info["progression"]
+
+
+def register_task(spec: TaskSpec, base: type[RealmEnv] = RealmEnv) -> type[RealmEnv]:
+    """Make ``spec``'s env class (a ``RealmEnv`` with ManiSkill's three-part docstring), register it
+    with ManiSkill/gymnasium under ``spec.env_id`` with the task's horizon, and return it. Call it
+    from the task's own module: the class reports that module."""
+    from mani_skill.utils.registration import register_env
+
+    from realm_ms.tasks.progression import RUBRICS
+
+    TASKS.register(spec.env_id, spec)
+    name = spec.env_id.replace("REALM-", "").replace("-v1", "").replace("-", "") + "Env"
+    doc = (
+        f"**Task Description:** {spec.description or spec.instruction}. Instruction: \"{spec.instruction}\".\n\n"
+        f"**Randomizations:** {', '.join(o.name for o in spec.objects if o.role != 'fixture')} placed collision-free "
+        f"in x {spec.spawn_region[:2]}, y {spec.spawn_region[2:]} m (robot base frame) with random yaw; "
+        f"seeded per episode.\n\n"
+        f"**Success Conditions:** REALM '{spec.skill}' rubric, all stages latched: "
+        f"{' -> '.join(s.value for s in RUBRICS.get(spec.skill))}."
+    )
+    module = sys._getframe(1).f_globals.get("__name__", base.__module__)
+    cls = type(name, (base,), {"task_spec": spec, "__doc__": doc, "__module__": module})
+    register_env(spec.env_id, max_episode_steps=spec.horizon)(cls)
+    return cls

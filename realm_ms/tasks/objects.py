@@ -16,19 +16,16 @@ import torch
 from mani_skill.utils.structs.pose import Pose
 
 from realm_ms.contacts import any_contact
-from realm_ms.tasks.progression import quat_apply, quat_to_matrix
+from realm_ms.registry import Registry
+from mani_skill.utils.geometry.rotation_conversions import quaternion_apply, quaternion_to_matrix
 from realm_ms.tasks.spec import SceneObject
 
 # asset prefix -> builder(env, SceneObject) -> task object (articulated objects register here)
-OBJECT_BUILDERS: dict[str, Callable] = {}
+OBJECT_BUILDERS: Registry[Callable] = Registry("object builder")
 
 
 def register_object_builder(prefix: str):
-    def deco(fn):
-        OBJECT_BUILDERS[prefix] = fn
-        return fn
-
-    return deco
+    return OBJECT_BUILDERS.register(prefix)
 
 
 def yaw_quat(yaw: torch.Tensor) -> torch.Tensor:
@@ -117,7 +114,7 @@ class RigidTaskObject(TaskObject):
 
     def anchor_pos(self) -> torch.Tensor:
         pose = self.entity.pose
-        return pose.p + quat_apply(pose.q, self._centre)
+        return pose.p + quaternion_apply(pose.q, self._centre)
 
     def touch_entities(self) -> list:
         return [self.entity]
@@ -141,7 +138,7 @@ class RigidTaskObject(TaskObject):
 
     def _to_local(self, p_world: torch.Tensor) -> torch.Tensor:
         pose = self.entity.pose
-        r = quat_to_matrix(pose.q)
+        r = quaternion_to_matrix(pose.q)
         return ((p_world - pose.p)[:, None, :] @ r)[:, 0, :]
 
 
@@ -149,7 +146,7 @@ def build_task_object(env, spec: SceneObject, variants: list[SceneObject] | None
     """``variants``: the object as each sub-env's (perturbed) task has it; articulated objects are
     built from sub-env 0's variant for all sub-envs (their geometry is one articulation layout)."""
     prefix = spec.asset.split("/", 1)[0]
-    builder = OBJECT_BUILDERS.get(prefix)
+    builder = OBJECT_BUILDERS.get(prefix) if prefix in OBJECT_BUILDERS else None
     if builder is not None:
         return builder(env, variants[0] if variants else spec)
     return RigidTaskObject(env, spec, variants)

@@ -5,7 +5,8 @@ the robot; all drawers start closed. The region is where the cabinet's whole foo
 its centre varies by a few centimetres; yaw varies by +-0.15 rad.
 """
 
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-OpenDrawer-v1",

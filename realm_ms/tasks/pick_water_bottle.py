@@ -1,7 +1,8 @@
 """REALM task 5, REALM-PickWaterBottle-v1: pick up the water bottle (skill "pick")."""
 
 from realm_ms.assets import TASK_OBJECTS as O
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-PickWaterBottle-v1",

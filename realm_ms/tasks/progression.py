@@ -20,6 +20,10 @@ from dataclasses import dataclass
 from typing import Callable
 
 import torch
+from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
+
+from realm_ms.registry import Registry
+from realm_ms.tasks.skills import Skill, as_skill
 
 
 class Stage(str, enum.Enum):
@@ -43,15 +47,16 @@ class Stage(str, enum.Enum):
 
 
 S = Stage
-RUBRICS: dict[str, tuple[Stage, ...]] = {
-    "put": (S.REACH, S.GRASP, S.LIFT_SLIGHT, S.MOVE_CLOSE, S.PLACE_INTO),
-    "stack": (S.REACH, S.GRASP, S.LIFT_SLIGHT, S.MOVE_CLOSE, S.PLACE_ONTO),
-    "pick": (S.REACH, S.GRASP, S.LIFT_LARGE),
-    "rotate": (S.REACH, S.GRASP, S.ROTATED),
-    "push": (S.REACH, S.TOUCH, S.TOGGLED_ON),
-    "open_drawer": (S.REACH, S.TOUCH_AND_MOVE_JOINT, S.OPEN_JOINT_SMALL, S.OPEN_JOINT_LARGE, S.OPEN_JOINT_FULL),
-    "close_drawer": (S.REACH, S.TOUCH_AND_MOVE_JOINT, S.CLOSE_JOINT_SMALL, S.CLOSE_JOINT_LARGE, S.CLOSE_JOINT_FULL),
-}
+K = Skill
+#: the ordered stages of each skill's rubric (REALM's task_progressions)
+RUBRICS: Registry[tuple[Stage, ...]] = Registry("rubric")
+RUBRICS.register(K.PUT, (S.REACH, S.GRASP, S.LIFT_SLIGHT, S.MOVE_CLOSE, S.PLACE_INTO))
+RUBRICS.register(K.STACK, (S.REACH, S.GRASP, S.LIFT_SLIGHT, S.MOVE_CLOSE, S.PLACE_ONTO))
+RUBRICS.register(K.PICK, (S.REACH, S.GRASP, S.LIFT_LARGE))
+RUBRICS.register(K.ROTATE, (S.REACH, S.GRASP, S.ROTATED))
+RUBRICS.register(K.PUSH, (S.REACH, S.TOUCH, S.TOGGLED_ON))
+RUBRICS.register(K.OPEN_DRAWER, (S.REACH, S.TOUCH_AND_MOVE_JOINT, S.OPEN_JOINT_SMALL, S.OPEN_JOINT_LARGE, S.OPEN_JOINT_FULL))
+RUBRICS.register(K.CLOSE_DRAWER, (S.REACH, S.TOUCH_AND_MOVE_JOINT, S.CLOSE_JOINT_SMALL, S.CLOSE_JOINT_LARGE, S.CLOSE_JOINT_FULL))
 
 
 @dataclass(frozen=True)
@@ -104,28 +109,9 @@ class StageInputs:
         self.__dict__[name] = value
 
 
-def quat_apply(q: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
-    """Rotate vectors v (..., 3) by unit quaternions q (..., 4) wxyz."""
-    w, u = q[..., :1], q[..., 1:]
-    uv = torch.linalg.cross(u, v.expand_as(u), dim=-1)
-    return v + 2 * (w * uv + torch.linalg.cross(u, uv, dim=-1))
-
-
-def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
-    w, x, y, z = q.unbind(-1)
-    return torch.stack(
-        [
-            1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-            2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-            2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
-        ],
-        -1,
-    ).view(*q.shape[:-1], 3, 3)
-
-
 def rotation_vector_z(quat: torch.Tensor, quat0: torch.Tensor) -> torch.Tensor:
     """z-component of the rotation vector of R_now * R_0^-1 (REALM's ROTATED measure, not Euler yaw)."""
-    r = quat_to_matrix(quat) @ quat_to_matrix(quat0).transpose(-1, -2)
+    r = quaternion_to_matrix(quat) @ quaternion_to_matrix(quat0).transpose(-1, -2)
     cos = ((r.diagonal(dim1=-2, dim2=-1).sum(-1) - 1) / 2).clamp(-1, 1)
     angle = torch.acos(cos)
     axis_z = r[..., 1, 0] - r[..., 0, 1]
@@ -177,10 +163,8 @@ class ProgressionTracker:
     """Latched per-env stage state for one rubric."""
 
     def __init__(self, skill: str, num_envs: int, device, thresholds: Thresholds = Thresholds()):
-        if skill not in RUBRICS:
-            raise ValueError(f"unknown skill {skill!r}; known: {sorted(RUBRICS)}")
-        self.skill = skill
-        self.stages = RUBRICS[skill]
+        self.skill = as_skill(skill)
+        self.stages = RUBRICS.get(self.skill)
         self.thresholds = thresholds
         self.met = torch.zeros(num_envs, len(self.stages), dtype=torch.bool, device=device)
 

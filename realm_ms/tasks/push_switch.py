@@ -5,7 +5,8 @@ by pressing its raised end past the centre. REALM's is wall-mounted; ours sits o
 desk/power-strip rocker) so every task shares the same top-down workspace.
 """
 
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-PushSwitch-v1",

@@ -1,7 +1,8 @@
 """REALM task 1, REALM-PutBananaInBox-v1: put the banana in the box (skill "put"; REALM's "box" is a tray)."""
 
 from realm_ms.assets import TASK_OBJECTS as O
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-PutBananaInBox-v1",

@@ -1,7 +1,8 @@
 """REALM task 0, REALM-PutGreenBlockInBowl-v1: put the green block in the bowl (skill "put")."""
 
 from realm_ms.assets import TASK_OBJECTS as O
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-PutGreenBlockInBowl-v1",

@@ -1,7 +1,8 @@
 """REALM task 3, REALM-RotateMug-v1: rotate the mug (skill "rotate")."""
 
 from realm_ms.assets import TASK_OBJECTS as O
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-RotateMug-v1",

@@ -1,7 +1,8 @@
 """Declarative task specs: a REALM task is data (objects, regions, instruction, rubric, cameras, pose).
 
-``register_task(TaskSpec(...))`` creates a ``RealmEnv`` subclass and registers it with ManiSkill and
-gymnasium under ``spec.env_id``. Task files hold only their declaration.
+A task file declares one ``TaskSpec`` and passes it to ``realm_ms.tasks.env.register_task``, which
+makes the env class and registers it with ManiSkill and gymnasium under ``spec.env_id``; this module
+holds only data (no env import).
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.urdf import DROID_RESET_QPOS
+from realm_ms.registry import Registry
+from realm_ms.tasks.skills import Skill, as_skill
 
 
 
@@ -52,7 +55,7 @@ DEFAULT_CAMERAS = (
 @dataclass(frozen=True)
 class TaskSpec:
     env_id: str
-    skill: str  # key of progression.RUBRICS
+    skill: Skill  # the rubric and the expert's program (a ``Skill`` or its value)
     instruction: str
     objects: tuple[SceneObject, ...]
     scene: str = "studio"
@@ -63,6 +66,9 @@ class TaskSpec:
     min_separation: float = 0.05  # m between placed objects' bounding circles
     description: str = ""
     extra: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "skill", as_skill(self.skill))
 
     def by_role(self, role: str) -> tuple[SceneObject, ...]:
         return tuple(o for o in self.objects if o.role == role)
@@ -75,34 +81,5 @@ class TaskSpec:
         return m
 
 
-TASKS: dict[str, TaskSpec] = {}
-
-
-def register_task(spec: TaskSpec, base=None):
-    """Create and register the env class for ``spec``; returns it."""
-    from mani_skill.utils.registration import register_env
-
-    from realm_ms.tasks.env import RealmEnv
-
-    if spec.env_id in TASKS:
-        raise ValueError(f"task {spec.env_id} declared twice")
-    TASKS[spec.env_id] = spec
-    base = base or RealmEnv
-    name = spec.env_id.replace("REALM-", "").replace("-v1", "").replace("-", "") + "Env"
-    doc = (
-        f"**Task Description:** {spec.description or spec.instruction}. Instruction: \"{spec.instruction}\".\n\n"
-        f"**Randomizations:** {', '.join(o.name for o in spec.objects if o.role != 'fixture')} placed collision-free "
-        f"in x {spec.spawn_region[:2]}, y {spec.spawn_region[2:]} m (robot base frame) with random yaw; "
-        f"seeded per episode.\n\n"
-        f"**Success Conditions:** REALM '{spec.skill}' rubric, all stages latched: "
-        f"{' -> '.join(s.value for s in _rubric(spec.skill))}."
-    )
-    cls = type(name, (base,), {"task_spec": spec, "__doc__": doc, "__module__": base.__module__})
-    register_env(spec.env_id, max_episode_steps=spec.horizon)(cls)
-    return cls
-
-
-def _rubric(skill: str):
-    from realm_ms.tasks.progression import RUBRICS
-
-    return RUBRICS[skill]
+#: every declared task by env id (``realm_ms.tasks.env.register_task`` adds to it)
+TASKS: Registry[TaskSpec] = Registry("task")

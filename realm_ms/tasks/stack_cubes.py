@@ -1,7 +1,8 @@
 """REALM task 6, REALM-StackCubes-v1: stack the green block on the yellow block (skill "stack")."""
 
 from realm_ms.assets import TASK_OBJECTS as O
-from realm_ms.tasks.spec import SceneObject, TaskSpec, register_task
+from realm_ms.tasks.env import register_task
+from realm_ms.tasks.spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-StackCubes-v1",

@@ -120,6 +120,10 @@ CASES: list[Case] = [
     cli("model-bad-yaml", f"sysid compare {{root}}/good --model {{root}}/models/bad_yaml.yaml {CPU}", r"bad_yaml\.yaml: not valid YAML"),
     cli("model-top-level-list", f"sysid compare {{root}}/good --model {{root}}/models/top_list.yaml {CPU}",
         r"top_list\.yaml: expected a mapping at the top level, got list"),
+    cli("model-gains-unknown", f"sysid compare {{root}}/good --model {{root}}/models/gains_unknown.yaml {CPU}",
+        r"gains_unknown\.yaml: gains: unknown preset 'stiff'; choose one of .*polymetis"),
+    cli("model-joint-physics-unknown", f"sysid compare {{root}}/good --model {{root}}/models/joint_physics_unknown.yaml {CPU}",
+        r"joint_physics: unknown preset 'sticky'; choose one of none, realm"),
     cli("model-version-9", f"sysid compare {{root}}/good --model {{root}}/models/version_9.yaml {CPU}", r"format version 9 not supported"),
     cli("model-binary-file", f"sysid compare {{root}}/good --model {{root}}/models/binary.yaml {CPU}", r"binary\.yaml: not a text \(YAML\) file"),
     cli("model-missing", f"sysid compare {{root}}/good --model {{root}}/models/nope.yaml {CPU}", r"--model: robot model .*nope\.yaml not found"),
@@ -170,11 +174,24 @@ CASES: list[Case] = [
     cli("assets-stats-no-catalog", "assets stats {root}/no_data --no-sheet", r"no catalog at .*no_data"),
     # ------------------------------------------------------------------------ top level
     cli("unknown-command", "nope", r"argument COMMAND: invalid choice: 'nope'"),
-    cli("demo-shader-nope", "demo --shader nope", r"argument --shader: invalid choice: 'nope'"),
+    cli("export-shader-nope", "export --tasks all --episodes 1 --out {root}/ex --shader nope", r"argument --shader: invalid choice: 'nope'"),
+    cli("demo-max-steps-0", "demo --max-steps 0 --tasks REALM-PickApple-v1 --out {root}/demo --no-video", r"argument --max-steps: must be >= 1"),
+    cli("demo-episodes-0", "demo --episodes 0 --out {root}/demo --no-video", r"argument --episodes: must be >= 1"),
+    cli("eval-episodes-0", "eval --policy zero --episodes 0 --tasks REALM-PickApple-v1 --perturbations Default --out {root}/ev --workers 1",
+        r"--episodes must be >= 1"),
+    cli("eval-max-steps-neg", "eval --policy zero --episodes 1 --max-steps -5 --tasks REALM-PickApple-v1 --perturbations Default --out {root}/ev --workers 1",
+        r"--max-steps must be >= 1"),
+    cli("eval-workers-0", "eval --policy zero --episodes 1 --workers 0 --tasks REALM-PickApple-v1 --out {root}/ev", r"argument --workers: must be >= 1"),
+    cli("eval-unknown-policy", "eval --policy nope --episodes 1 --out {root}/ev", r"unknown policy 'nope'; known: .*zero"),
+    cli("eval-camera-size-text", "eval --policy zero --camera-size big --out {root}/ev", r"--camera-size must be WxH"),
+    cli("validate-missing-csv", "validate {root}/nope.csv", r"no such file: .*nope\.csv"),
+    cli("export-episodes-neg", "export --tasks all --episodes -1 --out {root}/ex", r"--episodes must be >= 1"),
+    cli("render-seed-neg", "render sheet --out {root}/r.png --seed -1", r"argument --seed: must be >= 0"),
     cli("version", "--version", accepted="prints `realm-ms VERSION`, exit code 0"),
     cli("sysid-effects-json", "sysid effects --json", accepted="the effect library as JSON, exit code 0"),
     cli("compare-segment-0-subprocess", f"sysid compare {{root}}/good --segment 0 {CPU}", r"argument --segment: must be > 0 s", subprocess=True),
-    cli("npz-frames-subprocess", f"sysid compare {{root}}/frames {CPU}", r"`t` looks like frame indices", subprocess=True),
+    cli("compare-missing-data-subprocess", f"sysid compare {{root}}/nowhere {CPU}", r"DATA .*nowhere.* does not exist", subprocess=True),
+    cli("assets-timeout-0-subprocess", "assets build --source procedural --timeout 0", r"argument --timeout: must be > 0 s", subprocess=True),
 ]
 
 
@@ -317,13 +334,21 @@ CASES += [
 
 
 # ---------------------------------------------------------------------------- REALM envs (lead's side)
+def _env_id() -> str:
+    import gymnasium as gym
+
+    import realm_ms  # noqa: F401
+
+    return sorted(k for k in gym.registry if k.startswith("REALM-PickApple-v"))[-1]
+
+
 def _make(**kw):
     def call(root):
         import gymnasium as gym
 
         import realm_ms  # noqa: F401
 
-        env = gym.make("REALM-PickApple-v0", obs_mode="state", **kw)
+        env = gym.make(_env_id(), obs_mode="state", **kw)
         env.close()
         return env
 
@@ -336,7 +361,7 @@ def _step(action_fn):
 
         import realm_ms  # noqa: F401
 
-        env = gym.make("REALM-PickApple-v0", obs_mode="state")
+        env = gym.make(_env_id(), obs_mode="state")
         try:
             env.reset(seed=0)
             return env.step(action_fn())

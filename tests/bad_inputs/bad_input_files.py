@@ -161,6 +161,8 @@ def make_all(root: Path) -> None:
     model(root, "config_unknown.yaml", "effects: [{name: coulomb_friction, config: {wobbly: true}}]\n")
     model(root, "bad_yaml.yaml", "effects: [unclosed\n")
     model(root, "top_list.yaml", "- coulomb_friction\n")
+    model(root, "gains_unknown.yaml", "gains: stiff\n")
+    model(root, "joint_physics_unknown.yaml", "joint_physics: sticky\n")
     model(root, "version_9.yaml", "realm_ms_robot_model: 9\n")
     model(root, "binary.yaml", "").write_bytes(bytes(range(128, 256)))
     (root / "out_dir").mkdir()

@@ -22,7 +22,7 @@ import sapien
 import torch
 
 from realm_ms.tasks.articulated.common import ArticulatedTaskObject, box, mat
-from realm_ms.tasks.progression import quat_to_matrix
+from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
 
 
 @dataclass(frozen=True)
@@ -36,6 +36,7 @@ class CabinetGeometry:
     clearance: float = 0.003
     handle_standoff: float = 0.06  # bar centre in front of the drawer face
     handle_length: float = 0.14
+    handle_offsets: tuple = ()  # per drawer (bottom first): lateral handle offset (m); () = centred
     handle_half_xz: tuple = (0.008, 0.011)
     damping: float = 25.0  # N.s/m on the drawer joints
     body_rgba: tuple = (0.93, 0.91, 0.86, 1.0)
@@ -75,7 +76,7 @@ def scaled_geometry(g: CabinetGeometry, sx=1.0, sy=1.0, sz=1.0, look=0) -> Cabin
 
 class DrawerCabinet(ArticulatedTaskObject):
     def __init__(self, env, spec, open: str | float = 0.0, damping: str | float | None = None, geometry: CabinetGeometry | None = None,
-                 sx: float = 1.0, sy: float = 1.0, sz: float = 1.0, look: int = 0, drawer: str = "top"):
+                 sx: float = 1.0, sy: float = 1.0, sz: float = 1.0, look: int = 0, drawer: str = "top", stagger: int = 0):
         super().__init__(env)
         g = geometry or CabinetGeometry()
         if damping is not None:
@@ -84,6 +85,11 @@ class DrawerCabinet(ArticulatedTaskObject):
             g = replace(g, damping=float(damping))
         if (float(sx), float(sy), float(sz), int(look)) != (1.0, 1.0, 1.0, 0):
             g = scaled_geometry(g, sx, sy, sz, look)
+        if int(stagger):  # handles staggered sideways: each one reachable from above past the others
+            from dataclasses import replace
+
+            d = 0.13 * g.width / 0.44
+            g = replace(g, handle_length=0.12 * g.width / 0.44, handle_offsets=tuple(d * (k - (g.n_drawers - 1) / 2) for k in range(g.n_drawers)))
         self.geom = g
         self.target_index = DRAWER_NAMES[drawer] if drawer in DRAWER_NAMES else int(drawer)  # the task's drawer
         self.init_open = float(open)
@@ -92,7 +98,10 @@ class DrawerCabinet(ArticulatedTaskObject):
         self.drawers = [self.art.links_map[f"drawer_{k}"] for k in range(g.n_drawers)]
         self.joints = [self.art.joints_map[f"drawer_{k}_joint"] for k in range(g.n_drawers)]
         self.top = self.drawers[self.target_index]  # the task's drawer ("top" in REALM's instruction)
-        self._handle_local = torch.tensor([-g.handle_standoff, 0.0, 0.0], device=self.device)
+        self._handle_local = torch.tensor([-g.handle_standoff, self._handle_y(self.target_index), 0.0], device=self.device)
+
+    def _handle_y(self, k: int) -> float:
+        return float(self.geom.handle_offsets[k]) if self.geom.handle_offsets else 0.0
 
     # ---------------------------------------------------------------- building
     def _build(self, scene, name: str):
@@ -135,9 +144,10 @@ class DrawerCabinet(ArticulatedTaskObject):
                 box(lb, (t + dd / 2, s * (dw - 0.004 - wall / 2), -dh / 2 + wall / 2), (dd / 2, wall / 2, dh / 2 - wall), body_m, density=400)
             box(lb, (t + dd - wall / 2, 0, -dh / 2 + wall / 2), (wall / 2, dw - 0.004, dh / 2 - wall), body_m, density=400)
             # bar handle on two posts
-            box(lb, (-sx, 0, 0), (hx, g.handle_length / 2, hz), handle_m, density=1000)
+            hy = self._handle_y(k)
+            box(lb, (-sx, hy, 0), (hx, g.handle_length / 2, hz), handle_m, density=1000)
             for s in (-1, 1):
-                box(lb, (-sx / 2, s * (g.handle_length / 2 - 0.01), 0), (sx / 2, 0.006, 0.006), handle_m, density=1000)
+                box(lb, (-sx / 2, hy + s * (g.handle_length / 2 - 0.01), 0), (sx / 2, 0.006, 0.006), handle_m, density=1000)
         ab.initial_pose = sapien.Pose([0, 0, -2.0])
         art = ab.build(name=name, fix_root_link=True)
         for j in art.active_joints:  # damping only (PhysX joint friction is load-proportional)
@@ -154,7 +164,7 @@ class DrawerCabinet(ArticulatedTaskObject):
 
     def handle_pos(self) -> torch.Tensor:
         pose = self.top.pose
-        return pose.p + (quat_to_matrix(pose.q) @ self._handle_local)
+        return pose.p + (quaternion_to_matrix(pose.q) @ self._handle_local)
 
     def anchor_pos(self) -> torch.Tensor:
         """The top drawer's handle bar centre (REACH is measured to it, like to any object)."""
@@ -175,5 +185,5 @@ class DrawerCabinet(ArticulatedTaskObject):
         return -self.geom.depth / 2
 
     def yaw(self) -> torch.Tensor:
-        r = quat_to_matrix(self.pose.q)
+        r = quaternion_to_matrix(self.pose.q)
         return torch.atan2(r[:, 1, 0], r[:, 0, 0])

@@ -22,7 +22,7 @@ import sapien
 import torch
 
 from realm_ms.tasks.articulated.common import ArticulatedTaskObject, box, mat
-from realm_ms.tasks.progression import quat_to_matrix
+from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
 
 
 @dataclass(frozen=True)
@@ -119,7 +119,7 @@ class LightSwitch(ArticulatedTaskObject):
     def anchor_pos(self) -> torch.Tensor:
         """Centre of the rocker plate."""
         pose = self.rocker.pose
-        return pose.p + (quat_to_matrix(pose.q) @ self._anchor_local)
+        return pose.p + (quaternion_to_matrix(pose.q) @ self._anchor_local)
 
     def press_point_local(self) -> tuple[float, float, float]:
         """Where to press (in the housing frame) to turn it on: the raised +x end of the rocker top."""

@@ -6,14 +6,13 @@ from dataclasses import dataclass
 
 import sapien
 
-SCENES: dict[str, "TabletopScene"] = {}
+from realm_ms.registry import Registry
+
+SCENES: Registry["TabletopScene"] = Registry("scene")
 
 
 def register_scene(scene: "TabletopScene") -> "TabletopScene":
-    if scene.name in SCENES:
-        raise ValueError(f"scene {scene.name!r} registered twice")
-    SCENES[scene.name] = scene
-    return scene
+    return SCENES.register(scene.name, scene)
 
 
 def add_lights(env, table_top_z, ambient, sun_dir, sun_rgb, fill_rgb, lamps) -> None:
