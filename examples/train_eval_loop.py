@@ -41,6 +41,8 @@ def parse(argv=None):
     ap.add_argument("--eval-episodes", type=int, default=2, help="per (task, perturbation)")
     ap.add_argument("--eval-steps", type=int, default=120, help="control steps per evaluation episode")
     ap.add_argument("--device", default="cpu", help="cpu | cuda")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="torch CPU threads for training (default 1 on CPU: on a busy 2-core machine 2 threads spin ~8x the CPU time)")
     ap.add_argument("--smoke", action="store_true", help="CI: 1 short demo, 2 training steps, 1 short eval episode per cell")
     args = ap.parse_args(argv)
     if args.smoke:
@@ -91,6 +93,9 @@ def train(args, dataset: Path) -> Path:
         "--eval.batch_size=1", "--eval.use_async_envs=false",
     ]
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    threads = args.threads or (1 if args.device == "cpu" else None)
+    if threads:
+        env["OMP_NUM_THREADS"] = str(threads)
     subprocess.run(cmd, check=True, cwd=ROOT, env=env)
     return ckpt
 

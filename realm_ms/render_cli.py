@@ -98,7 +98,7 @@ def render_sheet(tasks, shaders, out: Path, size=(160, 90), seed: int = 0, denoi
     sheet = Image.new("RGB", (label_w + w * len(cols), head_h + h * len(tasks)), (24, 24, 24))
     draw = ImageDraw.Draw(sheet)
     for j, (s, c) in enumerate(cols):
-        draw.text((label_w + j * w + 3, 2), f"{s} / {c}", fill=(230, 230, 230))
+        draw.text((label_w + j * w + 3, 2), f"{s} {c.replace('exterior_', 'ext')}", fill=(230, 230, 230))
     spp = rt_samples_per_pixel(rt_spp) if rt_spp else contextlib.nullcontext()
     with spp, warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*(env.unwrapped|precision lowered).*")

@@ -35,7 +35,7 @@ def test_lerobot_policy_over_worker_processes(tmp_path):
 
     ckpt = make_tiny_policy(tmp_path / "tiny_act")
     out = tmp_path / "run_lerobot"
-    args = ["eval", "--policy", f"lerobot:{ckpt}", "--tasks", *TASKS, "--episodes", "2", "--max-steps", "12",
+    args = ["eval", "--policy", f"lerobot:{ckpt}", "--tasks", *TASKS, "--perturbations", "Default", "--episodes", "2", "--max-steps", "12",
             "--workers", "2", "--camera-size", "64x36", "--no-progress", "--out", str(out)]
     assert main(args) == 0
     recs = _check_run(out, "lerobot:")
@@ -48,7 +48,7 @@ def test_lerobot_policy_over_worker_processes(tmp_path):
 def test_openpi_server_in_process(tmp_path):
     out = tmp_path / "run_openpi"
     with OpenPIServer(hold_infer) as srv:
-        assert main(["eval", "--policy", f"openpi:{srv.address}", "--tasks", *TASKS, "--episodes", "2", "--max-steps", "12",
+        assert main(["eval", "--policy", f"openpi:{srv.address}", "--tasks", *TASKS, "--perturbations", "Default", "--episodes", "2", "--max-steps", "12",
                      "--workers", "1", "--camera-size", "64x36", "--no-progress", "--out", str(out)]) == 0
         assert srv.requests == 4 * 2  # 12 steps re-planned every 8: two requests per episode
     _check_run(out, "openpi:")
@@ -56,7 +56,7 @@ def test_openpi_server_in_process(tmp_path):
 
 def test_dead_openpi_server_fails_episodes_not_the_run(tmp_path):
     out = tmp_path / "run_dead"
-    assert main(["eval", "--policy", "openpi:127.0.0.1:9", "--openpi-wait", "0.5", "--tasks", TASKS[1], "--episodes", "2",
+    assert main(["eval", "--policy", "openpi:127.0.0.1:9", "--openpi-wait", "0.5", "--tasks", TASKS[1], "--perturbations", "Default", "--episodes", "2",
                  "--max-steps", "12", "--workers", "1", "--camera-size", "64x36", "--no-progress", "--out", str(out)]) == 0
     recs = [json.loads(line) for line in (out / "records.jsonl").read_text().splitlines()]
     assert len(recs) == 2 and all(r["status"] == "error" and "unreachable" in r["error"] for r in recs)
@@ -65,7 +65,7 @@ def test_dead_openpi_server_fails_episodes_not_the_run(tmp_path):
 
 def test_expert_through_eval_reaches_success(tmp_path):
     out = tmp_path / "run_expert"
-    assert main(["eval", "--policy", "expert", "--tasks", "REALM-PushSwitch-v1", "--episodes", "1", "--max-steps", "150",
+    assert main(["eval", "--policy", "expert", "--tasks", "REALM-PushSwitch-v1", "--perturbations", "Default", "--episodes", "1", "--max-steps", "150",
                  "--workers", "1", "--no-progress", "--out", str(out)]) == 0
     m = json.loads((out / "metrics.json").read_text())
     assert m["overall"]["success_rate"] == 1.0 and m["failure_stages"] == {"DONE": 1.0}
@@ -78,5 +78,11 @@ def test_bad_flags_are_one_line_errors(tmp_path, capsys):
     assert main(["eval", "--policy", "zero", "--tasks", TASKS[0], "--perturbations", "NOPE", "--out", str(tmp_path / "x")]) == 2
     assert main(["eval", "--policy", "lerobot:/does/not/exist", "--tasks", TASKS[0], "--out", str(tmp_path / "x")]) == 2
     assert main(["eval", "report", str(tmp_path / "empty")]) == 2
+    from realm_ms.eval.workers import gpu_physx_status
+
+    if not gpu_physx_status()[0]:  # no SAPIEN GPU PhysX here: --backend gpu must say so in one line
+        assert main(["eval", "--policy", "zero", "--tasks", TASKS[0], "--perturbations", "Default", "--backend", "gpu",
+                     "--out", str(tmp_path / "g")]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and "known:" in err
+    assert "GPU PhysX unavailable" in err or gpu_physx_status()[0]

@@ -18,7 +18,7 @@ def _lines(path: Path) -> list[str]:
 
 def test_kill_and_resume(tmp_path):
     out = tmp_path / "run"
-    cmd = [sys.executable, "-m", "realm_ms.cli", "eval", "--policy", "zero", "--tasks", "REALM-PushSwitch-v1",
+    cmd = [sys.executable, "-m", "realm_ms.cli", "eval", "--policy", "zero", "--tasks", "REALM-PushSwitch-v1", "--perturbations", "Default",
            "--episodes", "6", "--max-steps", "40", "--workers", "1", "--no-progress", "--no-quality", "--out", str(out)]
     env = dict(os.environ, MS_SKIP_ASSET_DOWNLOAD_PROMPT="1")
     proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)

@@ -113,3 +113,24 @@ def test_unknown_task_is_a_clear_error():
 
     with pytest.raises(ValueError, match="unknown REALM task"):
         make_env(make_env_config("realm", task="REALM-Nope-v1"), n_envs=1)
+
+
+def test_success_reaches_lerobot_through_final_info():
+    """The scripted expert driving the vector env: LeRobot's rollout reads success from final_info."""
+    from lerobot.envs.factory import make_env, make_env_config
+
+    import lerobot_env_realm  # noqa: F401
+    from realm_ms.expert import make_expert
+
+    cfg = make_env_config("realm", task="REALM-PushSwitch-v1", observation_width=32, observation_height=24, episode_length=150)
+    vec = make_env(cfg, n_envs=1, use_async_envs=False)["REALM-PushSwitch-v1"][0]
+    try:
+        vec.reset(seed=[0])
+        expert = make_expert(vec.envs[0]._env)
+        for _ in range(150):
+            _, _, term, trunc, info = vec.step(expert.act(None).cpu().numpy())
+            if term[0] or trunc[0]:
+                break
+        assert bool(term[0]) and bool(info["final_info"]["is_success"][0])
+    finally:
+        vec.close()

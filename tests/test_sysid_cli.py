@@ -46,10 +46,13 @@ def test_synth_layout(data):
 
 
 def test_compare(data, capsys, tmp_path):
-    code, out, _ = run(capsys, "compare", data / "train", "--workers", 1, "--json", tmp_path / "c.json")
+    # the README's `realm sysid compare data/` on synth's train/ + heldout/ layout: all trajectories
+    code, out, _ = run(capsys, "compare", data, "--workers", 1, "--json", tmp_path / "c.json")
     assert code == 0 and "RMSE" in out
     c = json.loads((tmp_path / "c.json").read_text())
     assert len(c["per_joint_rmse_rad"]) == 7 and c["noise_floor_rad"] > 0 and c["error_over_time"]
+    names = json.loads((data / "synth.json").read_text())["config"]
+    assert len(c["trajectories"]) == names["n_train"] + names["n_heldout"]
 
 
 @pytest.fixture(scope="module")
@@ -58,9 +61,10 @@ def outdir(tmp_path_factory):
 
 
 def test_diagnose_json_schema(data, capsys, outdir):
-    code, out, _ = run(capsys, "diagnose", data, "--workers", 1, "--json", outdir / "d.json")
+    code, out, err = run(capsys, "diagnose", data, "--workers", 1, "--json", outdir / "d.json")
     assert code == 0
     d = json.loads((outdir / "d.json").read_text())
+    assert (out + err).count(d["message"]) == 1  # the verdict, printed once (stdout)
     assert set(d["baseline"]) >= {"heldout_rmse_rad", "noise_floor_rad"}
     assert isinstance(d["missing_effect_found"], bool)
     assert len(d["suspects"]) == 11

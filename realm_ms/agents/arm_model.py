@@ -300,11 +300,14 @@ class ArmModel:
         return cols.view(b, n, n).transpose(1, 2)
 
 
+_EPS = np.zeros((3, 3, 3))
+_EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
+_EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b over the last axis (np.cross is ~10x slower on tiny arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    """a x b over the last axis (Levi-Civita einsum: ~3x faster than np.cross on (B, 7, 3) arrays)."""
+    return np.einsum("ijk,...j,...k->...i", _EPS, a, b)
 
 
 class NumpyArmModel:
@@ -319,6 +322,7 @@ class NumpyArmModel:
         self.inertias, self.tip_offset, self.gravity = f(model.inertias), f(model.tip_offset), f(model.gravity)
         self._OK, self._OK2, self._com_h = f(model._OK), f(model._OK2), f(model._com_h)
         self._eye3 = np.eye(3)
+        self._m_suf = np.cumsum(self.masses[::-1])[::-1].copy()  # mass of links i..n-1
 
     def link_frames(self, q: np.ndarray) -> np.ndarray:
         s, c = np.sin(q)[..., None, None], np.cos(q)[..., None, None]
@@ -357,6 +361,39 @@ class NumpyArmModel:
         rev = lambda x: np.flip(np.cumsum(np.flip(x, 1), 1), 1)  # noqa: E731
         moment = rev(nn + _cross(c, f)) - _cross(p, rev(f))
         return (z * moment).sum(-1)
+
+    def bias_and_mass(self, frames: np.ndarray, qd: np.ndarray, gravity: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(C(q, qd) qd [+ g(q)], M(q)) sharing the per-link world quantities of both."""
+        rot, p = frames[..., :3, :3], frames[..., :3, 3]
+        z = (rot @ self.axes[..., None])[..., 0]
+        c = (frames @ self._com_h)[..., :3, 0]
+        inertia_w = rot @ self.inertias @ rot.transpose(0, 1, 3, 2)
+        rev = lambda x: np.flip(np.cumsum(np.flip(x, 1), 1), 1)  # noqa: E731
+        m = self.masses
+        # RNEA, zero acceleration
+        w_rel = z * qd[..., None]
+        w = np.cumsum(w_rel, axis=1)
+        dw = np.cumsum(_cross(w - w_rel, w_rel), axis=1)
+        d = np.diff(p, axis=1)
+        wp = w[:, :-1]
+        trans = _cross(dw[:, :-1], d) + _cross(wp, _cross(wp, d))
+        a = np.cumsum(np.concatenate([np.broadcast_to(-self.gravity if gravity else np.zeros(3), (qd.shape[0], 1, 3)),
+                                      trans], axis=1), axis=1)
+        r = c - p
+        f = m[:, None] * (a + _cross(dw, r) + _cross(w, _cross(w, r)))
+        iw_dw = inertia_w @ np.stack([w, dw], axis=-1)
+        nn = iw_dw[..., 1] + _cross(w, iw_dw[..., 0])
+        bias = (z * (rev(nn + _cross(c, f)) - _cross(p, rev(f)))).sum(-1)
+        # CRBA
+        cc = (c * c).sum(-1)[..., None, None] * self._eye3 - c[..., :, None] * c[..., None, :]
+        i_o = rev(inertia_w + m[:, None, None] * cc)
+        h = rev(m[:, None] * c)
+        v = _cross(p, z)
+        ang = (i_o @ z[..., None])[..., 0] + _cross(h, v)
+        lin = self._m_suf[:, None] * v + _cross(z, h)
+        g = z @ ang.transpose(0, 2, 1) + v @ lin.transpose(0, 2, 1)
+        upper = np.triu(g)
+        return bias, upper + np.triu(g, 1).transpose(0, 2, 1)
 
     def mass_matrix(self, frames: np.ndarray) -> np.ndarray:
         rot, p = frames[..., :3, :3], frames[..., :3, 3]

@@ -350,16 +350,20 @@ class DroidArmDriver:
         jt = jac.transpose(0, 2, 1)
         kp = k["kq"][:, :, None] * np.eye(n) + jt @ (k["kx"][..., None] * jac)
         kd = k["kqd"][:, :, None] * np.eye(n) + jt @ (k["kxd"][..., None] * jac)
-        bias = np.zeros_like(q)
-        if cfg.coriolis_feedforward or cfg.gravity_compensation:
-            bias = npm.rnea(frames, qd if cfg.coriolis_feedforward else np.zeros_like(qd), cfg.gravity_compensation)
-        mass = npm.mass_matrix(frames) + k["arm"]
+        bias, mass = npm.bias_and_mass(frames, qd if cfg.coriolis_feedforward else np.zeros_like(qd), cfg.gravity_compensation)
+        if not (cfg.coriolis_feedforward or cfg.gravity_compensation):
+            bias = np.zeros_like(q)
+        mass = mass + k["arm"]
         minv = np.linalg.inv(mass)
         ticks = max(1, round(dt * cfg.law_hz))
         t = dt / ticks
         p_, d_ = minv @ kp, minv @ kd
-        eye = np.eye(n)
-        phi = np.block([[eye - 0.5 * t * t * p_, t * eye - 0.5 * t * t * d_], [-t * p_, eye - t * d_]])
+        eye = k.setdefault("eye", np.eye(n))
+        phi = np.empty((q.shape[0], 2 * n, 2 * n))
+        phi[:, :n, :n] = eye - 0.5 * t * t * p_
+        phi[:, :n, n:] = t * eye - 0.5 * t * t * d_
+        phi[:, n:, :n] = -t * p_
+        phi[:, n:, n:] = eye - t * d_
         phi = np.linalg.matrix_power(phi, ticks)
         err = q - self.q_target.double().numpy()
         ext = self.plant_prev.double().numpy()

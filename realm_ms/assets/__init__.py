@@ -13,6 +13,8 @@ Public API::
         ObjectSpec, ObjectQuery, TASK_OBJECTS,
     )
 
+``real/<noun>`` ids (``real/apple``, ``real/bowl``) are real textured meshes from default-installed
+packages, fitted to real sizes (``realm_ms.assets.real_objects``; procedural fallback when missing).
 Procedural ids are ``proc/<category>/<seed>[?color=<name>&size=<metres>]``; ``size`` is the largest
 extent. Objects are upright with the origin at the bottom centre, so a pose at table height rests
 them on the table. ``TASK_OBJECTS`` maps REALM task nouns to ids (e.g. ``"green cube"``).
@@ -32,6 +34,7 @@ from realm_ms.assets.catalog import (
     procedural_spec,
 )
 from realm_ms.assets.loader import build_actor, make_cpu_scene
+from realm_ms.assets import real_objects  # noqa: F401  (registers "real/<noun>" ids)
 from realm_ms.assets.sampler import categories, describe, sample_objects
 from realm_ms.assets.spec import ObjectSpec
 from realm_ms.assets.task_objects import TASK_OBJECTS, task_object_spec

@@ -175,12 +175,16 @@ def load_catalog(path: str | Path | None = None) -> BuiltCatalog | ProceduralCat
     return _catalog_cache[key]  # type: ignore[return-value]
 
 
+# id prefix -> resolver(oid) -> ObjectSpec, for ids outside procedural/built catalogs; modules
+# register themselves (``real/``: default-installed real meshes, ``realm_ms.assets.real_objects``)
+ID_RESOLVERS: dict = {}
+
+
 def get_object_spec(oid: str, catalog: BuiltCatalog | ProceduralCatalog | str | Path | None = None) -> ObjectSpec:
     if oid.startswith("proc/") and catalog is None:
         return procedural_spec(oid)
-    if oid.startswith("real/"):  # default-installed real meshes for task nouns (procedural fallback)
-        from realm_ms.assets.real_objects import real_object_spec
-
-        return real_object_spec(oid)
+    for prefix, resolve in ID_RESOLVERS.items():  # e.g. "real/" (realm_ms.assets.real_objects)
+        if oid.startswith(prefix):
+            return resolve(oid)
     cat = catalog if isinstance(catalog, (BuiltCatalog, ProceduralCatalog)) else load_catalog(catalog)
     return cat.get(oid)

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms.assets.catalog import ID_RESOLVERS, procedural_spec
 from realm_ms.assets.paths import cache_dir
 from realm_ms.assets.spec import ObjectSpec
 
@@ -64,8 +65,6 @@ def real_object_spec(oid: str) -> ObjectSpec:
 
 @functools.lru_cache(maxsize=64)
 def _real_spec(name: str, cache_root: str) -> ObjectSpec:
-    from realm_ms.assets.catalog import procedural_spec
-
     obj = REAL_OBJECTS[name]
     ref = procedural_spec(obj.fallback)
     try:
@@ -134,3 +133,6 @@ def _fitted(obj: RealObject, ref: ObjectSpec, root: Path) -> ObjectSpec:
         write_convex_obj(hulls, tmp / "collision.obj")
         (tmp / "record.json").write_text(rec.to_json())
     return ObjectSpec(rec, folder)
+
+
+ID_RESOLVERS[PREFIX] = real_object_spec

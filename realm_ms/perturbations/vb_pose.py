@@ -78,4 +78,4 @@ class VBPose(Perturbation):
             yaw = yaw + torch.tensor([x["dyaw"] for x in params], device=p.device)
         main.set_pose(p, yaw)  # sized to the reset sub-envs (ManiSkill's reset mask)
         for k, x in enumerate(params):
-            x["pose"] = [as_float(v) for v in p[k].tolist()] + [as_float(yaw[k])]
+            x["pose"] = [as_float(v) for v in p[k].tolist()] + [as_float(torch.remainder(yaw[k] + np.pi, 2 * np.pi) - np.pi)]  # x, y, z, yaw

@@ -11,6 +11,7 @@ the ``MODEL.yaml`` format live below this package, in :mod:`realm_ms.agents.effe
 
 Module map (small modules, one job each)::
 
+    effect_spec.py  EFFECT[:param=value,...] specs of --hidden / --add
     timeseries.py   Trajectory, validation, seeded split;  data_io.py: npz + LeRobot v3.0
     locked_urdf.py  locked-gripper replay URDF;  simulator.py: PhysX CPU batch replay
     gpu.py          physx_cuda batch replay;  engine.py: make_simulator, chunking, worker processes

@@ -150,6 +150,11 @@ def _diagnose(args) -> int:
     kw = {}
     if args.candidates:
         kw["candidates"] = tuple(s.strip() for s in args.candidates.split(",") if s.strip())
+        with _user_input("--candidates: "):
+            from realm_ms.agents.effects import effect_class
+
+            for name in kw["candidates"]:
+                effect_class(name)
     _check_outputs(args, files=("--json",))
     _check_model(args)
     with _user_input():

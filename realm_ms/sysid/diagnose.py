@@ -14,6 +14,10 @@ Full CMA-ES per candidate is too slow for a few minutes on 2 cores, so the diagn
    error within ``confound_margin``, both are reported with a note instead of a single answer.
 5. "no missing effect": the best suspect removes less than ``min_improvement`` of the held-out RMSE,
    or the baseline already sits within ``floor_factor`` of the noise floor.
+6. "unexplained" (a structural mismatch no single effect covers): each suspect reports the share of
+   the *model error* (held-out MSE above the noise floor) it explains; when the best explains less
+   than ``min_explained`` of it, or none helps while the baseline is over ``unexplained_factor`` x
+   the noise floor, the verdict says so instead of naming the least-bad effect.
 """
 
 from __future__ import annotations
@@ -38,6 +42,8 @@ class DiagnoseConfig:
     refine: int = 3  # effects that get a second linearised iteration
     min_improvement: float = 0.10  # relative held-out RMSE reduction to call an effect missing
     floor_factor: float = 1.15  # baseline RMSE within this factor of the noise floor: nothing missing
+    min_explained: float = 0.5  # share of the model error the best effect must explain to be named
+    unexplained_factor: float = 3.0  # baseline / noise floor above which an unexplained residual is flagged
     confound_margin: float = 0.35  # relative difference of remaining held-out error within which a pair is confounded
     retune_model: bool = True  # re-fit the given model's parameters together with each candidate
 
@@ -52,9 +58,10 @@ class Suspect:
     evidence: str
     confounded_with: list[str] = field(default_factory=list)
     retuned_model_params: dict[str, float] = field(default_factory=dict)
+    explains: float = 0.0  # share of the held-out model error (MSE above the noise floor) removed
 
     def to_json(self) -> dict:
-        return {"effect": self.effect, "score": round(float(self.score), 6),
+        return {"effect": self.effect, "score": round(float(self.score), 6), "explains": round(float(self.explains), 4),
                 "heldout_rmse_after_rad": float(self.heldout_rmse_after_rad), "params": self.params,
                 "evidence": self.evidence, "train_rmse_after_rad": float(self.train_rmse_after_rad),
                 "confounded_with": self.confounded_with, "retuned_model_params": self.retuned_model_params}
@@ -71,6 +78,7 @@ class Diagnosis:
     suspects: list[Suspect]
     features: Features
     message: str
+    unexplained: bool = False
 
     def to_json(self) -> dict:
         return {
@@ -79,6 +87,7 @@ class Diagnosis:
                          "per_joint_heldout_rmse_rad": [float(x) for x in self.per_joint_heldout_rmse],
                          "noise_floor_per_joint_rad": [float(x) for x in self.noise_floor_per_joint]},
             "missing_effect_found": bool(self.missing_effect_found),
+            "unexplained": bool(self.unexplained),
             "message": self.message,
             "suspects": [s.to_json() for s in self.suspects],
             "features": self.features.to_dict(),
@@ -189,11 +198,22 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
 
     log(f"noise floor ≈ {floor:.2e} rad")
     # 5. verdict
+    excess = max(base_he_rmse**2 - floor**2, 1e-30)
+    for sp in suspects:
+        sp.explains = float(np.clip((base_he_rmse**2 - sp.heldout_rmse_after_rad**2) / excess, 0.0, 1.0))
     best = suspects[0] if suspects else None
     at_floor = base_he_rmse <= cfg.floor_factor * floor
-    found = bool(best is not None and best.score >= cfg.min_improvement and not at_floor)
+    helps = bool(best is not None and best.score >= cfg.min_improvement and not at_floor)
+    found = helps and best.explains >= cfg.min_explained
+    unexplained = not at_floor and ((helps and not found) or (not helps and base_he_rmse > cfg.unexplained_factor * floor))
     if found:
-        msg = f"missing effect: {best.effect} (removes {100 * best.score:.0f}% of the held-out RMSE)"
+        msg = (f"missing effect: {best.effect} (removes {100 * best.score:.0f}% of the held-out RMSE, "
+               f"{100 * best.explains:.0f}% of the model error above the noise floor)")
+    elif unexplained:
+        shares = ", ".join(f"{sp.effect} {100 * sp.explains:.0f}%" for sp in suspects[:3])
+        msg = (f"unexplained: no single effect explains the residual (held-out RMSE {base_he_rmse:.2e} rad, "
+               f"{base_he_rmse / max(floor, 1e-30):.1f}x the noise floor); share of the model error each "
+               f"candidate explains: {shares}. A structural mismatch (plant, controller or data) is likely")
     elif at_floor:
         msg = (f"no missing effect: held-out RMSE {base_he_rmse:.2e} rad is at the noise floor ({floor:.2e} rad)")
     else:
@@ -201,7 +221,8 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
                f"{100 * (best.score if best else 0):.0f}% of the held-out RMSE {base_he_rmse:.2e} rad "
                f"(noise floor {floor:.2e} rad)")
     # the verdict (msg) is printed once, by the caller (CLI: on stdout)
-    return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), found, suspects, feats, msg)
+    return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), found, suspects, feats, msg,
+                     unexplained)
 
 
 def _config(fx) -> dict:

@@ -5,7 +5,8 @@
    ``gn_iterations``) -- cheap, and CMA-ES then polishes from a good mean;
 3. CMA-ES in normalised coordinates (``cmaes``), the population of each generation simulated as one
    batch (one candidate per env on GPU, worker processes on CPU); progress bar; history;
-4. before/after RMSE per joint on train and held-out data.
+4. before/after RMSE per joint on train and held-out data, and 95 % confidence intervals of the
+   fitted parameters from the Jacobian at the optimum (``optimize.confidence_intervals``).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.effects import make_effect
-from realm_ms.sysid.optimize import Group, cma_fit, evaluate_groups, linearized_step
+from realm_ms.sysid.optimize import Group, cma_fit, confidence_intervals, evaluate_groups, linearized_step
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
@@ -50,11 +51,13 @@ class FitResult:
     gn_history: list[dict] = field(default_factory=list)
     units: dict[str, str] = field(default_factory=dict)
     bounds: dict[str, list[float]] = field(default_factory=dict)
+    # Gauss-Newton 95 % intervals at the fit (``optimize.confidence_intervals``): {key: {std, ci95}}
+    uncertainty: dict[str, dict] = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return {"effects": self.effects, "params": self.params, "before": self.before, "after": self.after,
                 "history": self.history, "units": self.units, "bounds": self.bounds,
-                "linearized_start": self.gn_history}
+                "uncertainty": self.uncertainty, "linearized_start": self.gn_history}
 
 
 def _metrics(tr_res, he_res) -> dict:
@@ -132,13 +135,15 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
 
     (a_tr,), (a_he,) = evaluate_groups(ev, [tr_ss, he_ss], base_fixed, [group], [group.u[None]])
     after = _metrics(a_tr, a_he)
+    uncertainty = confidence_intervals(ev, tr_ss, base_fixed, group)
     log(f"after: train RMSE {after['train_rmse_rad']:.3e} rad, held-out {after['heldout_rmse_rad']:.3e} rad")
     out_model = RobotModel(sorted(base_fixed + fitted, key=lambda f: f.order), model.gains, model.joint_physics,
                            model.physics_hz, dict(model.provenance))
     params = {p.key: float(v) for p, v in zip(group.params, group.params.from_unit(group.u))}
     units = {p.key: p.unit for p in group.params}
     bounds = {p.key: [p.spec.lo, p.spec.hi] for p in group.params}
-    return FitResult(out_model, [fx.name for fx in fitted], params, before, after, res.history, gn_hist, units, bounds)
+    return FitResult(out_model, [fx.name for fx in fitted], params, before, after, res.history, gn_hist, units, bounds,
+                     uncertainty)
 
 
 def _config(fx) -> dict:

@@ -200,6 +200,46 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
     return out
 
 
+def confidence_intervals(evaluator, ss: SegmentSet, base: list[Effect], group: Group, z: float = 1.96) -> dict:
+    """Gauss-Newton uncertainty at the fitted values: a forward-difference Jacobian of the simulated
+    positions w.r.t. each parameter (one batch of k + 1 rollouts), Sigma_u = s^2 (J^T J)^-1 with
+    s^2 = RSS / (N - k), inflated by (1 + rho) / (1 - rho) for the residual's lag-1 autocorrelation
+    rho (trajectory residuals are far from white), mapped to physical units through each
+    parameter's scale. Returns {key: {"std": ..., "ci95": [lo, hi]}}; a direction the data cannot
+    see (singular J^T J) gets an infinite interval, clipped to the bounds."""
+    k = len(group.params)
+    if k == 0:
+        return {}
+    u0 = group.u.copy()
+    h = np.where(u0 + 0.01 > 1.0, -0.01, 0.01)
+    pts = np.vstack([u0] + [u0 + np.eye(k)[i] * h[i] for i in range(k)])
+    (res,) = evaluate_groups(evaluator, [ss], base, [group], [pts])
+    _, _, sim = res[0]
+    group.apply(u0)
+    mask = ss.mask
+    y0 = sim[0][mask]
+    r = ss.meas[mask] - y0
+    jac = np.stack([(sim[i + 1][mask] - y0).ravel() / h[i] for i in range(k)], axis=1)
+    n = r.size
+    rss = float(np.nansum(r**2))
+    rr = r - np.nanmean(r, axis=0)
+    rho = float(np.clip(np.nansum(rr[1:] * rr[:-1]) / max(np.nansum(rr**2), 1e-300), 0.0, 0.99))
+    s2 = rss / max(n - k, 1) * (1 + rho) / (1 - rho)
+    jtj = jac.T @ jac
+    try:
+        cov = s2 * np.linalg.pinv(jtj, rcond=1e-10, hermitian=True)
+        std_u = np.sqrt(np.clip(np.diag(cov), 0, None))
+        std_u[np.diag(jtj) <= 1e-300] = np.inf
+    except np.linalg.LinAlgError:
+        std_u = np.full(k, np.inf)
+    out = {}
+    for i, p in enumerate(group.params):
+        lo_u, hi_u = u0[i] - z * std_u[i], u0[i] + z * std_u[i]
+        v, lo, hi = (float(p.from_unit(x)) for x in (u0[i], lo_u if np.isfinite(lo_u) else 0.0, hi_u if np.isfinite(hi_u) else 1.0))
+        out[p.key] = {"std": float((hi - lo) / (2 * z)) if np.isfinite(std_u[i]) else float("inf"), "ci95": [lo, hi]}
+    return out
+
+
 # ---------------------------------------------------------------------------- CMA-ES
 @dataclass
 class CmaResult:

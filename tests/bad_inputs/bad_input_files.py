@@ -95,6 +95,7 @@ def make_all(root: Path) -> None:
     root.mkdir(parents=True, exist_ok=True)
     n = 45
     npz_dir(root, "good")
+    npz_dir(root, "one", count=1)
     synth = root / "synth_layout"
     npz_dir(synth, "train", count=2)
     npz_dir(synth, "heldout", count=1)

@@ -2,7 +2,8 @@
 
 Sections (``sections.py``, one function each, in ``SECTIONS`` order): overview error table, where the
 model fails (conditions and time windows), suspects table, waterfall of held-out error as the
-model's effects are added one at a time, fitted parameters with units/bounds, fit history,
+model's effects are added one at a time and with each one left out, fitted parameters with
+units/bounds and 95 % confidence intervals (from ``fit --json``), fit history,
 overlays, residual vs q̇ / q̈ / g(q), cross-correlation vs lag, hysteresis at reversals.
 """
 
@@ -71,6 +72,9 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
         for k in range(1, len(effects)):
             groups.append(Group.of(effects[:k]))
             pts.append(groups[-1].u[None])
+        for k in range(len(effects)):  # leave one effect out: what each one is worth in the full model
+            groups.append(Group.of(effects[:k] + effects[k + 1:]))
+            pts.append(groups[-1].u[None])
     r_tr, r_he = evaluate_groups(evaluator, [tr_ss, he_ss], [], groups, pts)
     rep = lambda label, ss, r: Replay(label, ss, r[2][0])  # noqa: E731
     name = "model" if model.effects else "nominal"
@@ -85,6 +89,9 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
             wf.append(("+ " + effects[k - 1].name, float(np.sqrt(r_he[k + 1][0][0]))))
         wf.append(("+ " + effects[-1].name if len(effects) > 1 else "+ " + effects[0].name, float(np.sqrt(r_he[1][0][0]))))
         d.waterfall = wf
+        if waterfall and len(effects) > 1:
+            first = len(effects) + 1
+            d.leave_one_out = [("- " + fx.name, float(np.sqrt(r_he[first + k][0][0]))) for k, fx in enumerate(effects)]
     if diagnosis is None:
         log("diagnosing what is still missing")
         diagnosis = diagnose(train, heldout, model, evaluator=evaluator, log=log).to_json()

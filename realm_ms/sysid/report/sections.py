@@ -48,6 +48,7 @@ class ReportData:
     diagnosis: dict | None = None
     fit: dict | None = None
     waterfall: list[tuple[str, float]] = field(default_factory=list)
+    leave_one_out: list[tuple[str, float]] = field(default_factory=list)  # full model minus one effect
     model: object = None
 
 
@@ -253,7 +254,15 @@ def waterfall(d: ReportData):
     a.set_ylabel("held-out RMSE [mrad]")
     a.legend(fontsize=8)
     rows = [[l, _fmt(v), f"{v / max(d.noise_floor, 1e-12):.1f}"] for l, v in zip(labels, vals)]
-    return "Waterfall: held-out error as effects are added", to_img(fig, "waterfall") + table(["model", "held-out RMSE [rad]", "/ noise"], rows)
+    html = to_img(fig, "waterfall") + table(["model", "held-out RMSE [rad]", "/ noise"], rows)
+    if d.leave_one_out:
+        full = vals[-1]
+        rows = [[l, _fmt(v), f"{v / max(d.noise_floor, 1e-12):.1f}", f"{(v - full) / max(full, 1e-12):+.0%}"]
+                for l, v in d.leave_one_out]
+        html += ("<p>Leave one effect out (the full model without it): an effect whose removal barely "
+                 "raises the held-out error is not needed.</p>"
+                 + table(["model", "held-out RMSE [rad]", "/ noise", "vs full model"], rows))
+    return "Waterfall: held-out error as effects are added (and left out)", html
 
 
 def parameters(d: ReportData):
@@ -264,14 +273,16 @@ def parameters(d: ReportData):
             v = vals[p.local_key]
             at_bound = p.spec.fit_by_default and (abs(v - p.spec.lo) < 1e-6 * (p.spec.hi - p.spec.lo) + 1e-12 or
                                                    abs(v - p.spec.hi) < 1e-6 * (p.spec.hi - p.spec.lo) + 1e-12) and v != p.spec.off
-            rows.append([fx.name, p.local_key, format_value(v, p.unit), p.unit, f"[{p.spec.lo:g}, {p.spec.hi:g}]",
+            unc = ((d.fit or {}).get("uncertainty") or {}).get(f"{fx.name}.{p.local_key}")
+            ci = (f"[{format_value(unc['ci95'][0], p.unit)}, {format_value(unc['ci95'][1], p.unit)}]" if unc else "")
+            rows.append([fx.name, p.local_key, format_value(v, p.unit), ci, p.unit, f"[{p.spec.lo:g}, {p.spec.hi:g}]",
                          f"{p.spec.off:g}", "at bound" if at_bound else ("fixed" if not p.spec.fit_by_default else "")])
-            cls.append([""] * 6 + ["bad" if at_bound else ""])
+            cls.append([""] * 7 + ["bad" if at_bound else ""])
     if not rows:
         return "Fitted parameters", "<p>The model has no effects (nominal robot).</p>"
     prov = d.model.provenance
     extra = f"<p class='note'>gains preset <b>{esc(d.model.gains)}</b>, joint physics <b>{esc(d.model.joint_physics)}</b>, {d.model.physics_hz:g} Hz; provenance: {esc(', '.join(f'{k}={v}' for k, v in prov.items() if not isinstance(v, list)))}</p>"
-    return "Fitted parameters (units, bounds)", extra + table(["effect", "parameter", "value", "unit", "bounds", "off", ""], rows, left=2, classes=cls)
+    return "Fitted parameters (units, bounds, 95 % CI)", extra + table(["effect", "parameter", "value", "95 % CI", "unit", "bounds", "off", ""], rows, left=2, classes=cls)
 
 
 def fit_health(d: ReportData):
