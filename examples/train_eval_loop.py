@@ -1,7 +1,7 @@
 """Train-eval loop on REALM with LeRobot: expert demos -> `lerobot-train` -> `realm eval` -> report.
 
     .venv/bin/python examples/train_eval_loop.py [--out outputs/train_eval] [--task REALM-PickApple-v1]
-        [--episodes 4] [--steps 200] [--perturbation V-AUG] [--device cpu] [--smoke]
+        [--episodes 2] [--steps 200] [--perturbation V-AUG] [--device cpu] [--smoke]
 
 1. `realm export`: scripted-expert demonstrations of one task as a LeRobot v3.0 dataset (DROID features);
 2. `lerobot-train`: a small ACT policy (tiny transformer, ResNet-18 from scratch: nothing is
@@ -32,14 +32,14 @@ def parse(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("outputs/train_eval"))
     ap.add_argument("--task", default="REALM-PickApple-v1")
-    ap.add_argument("--episodes", type=int, default=4, help="expert demonstrations to export")
+    ap.add_argument("--episodes", type=int, default=2, help="expert demonstrations to export")
     ap.add_argument("--demo-steps", type=int, default=150, help="control steps per demonstration")
     ap.add_argument("--steps", type=int, default=200, help="lerobot-train optimisation steps")
     ap.add_argument("--batch-size", type=int, default=8)
     ap.add_argument("--size", default="64x48", help="camera WxH for export, training and eval (CPU default; 320x180 = DROID)")
     ap.add_argument("--perturbation", default="V-AUG", help="evaluated besides Default")
-    ap.add_argument("--eval-episodes", type=int, default=2, help="per (task, perturbation)")
-    ap.add_argument("--eval-steps", type=int, default=120, help="control steps per evaluation episode")
+    ap.add_argument("--eval-episodes", type=int, default=1, help="per (task, perturbation)")
+    ap.add_argument("--eval-steps", type=int, default=100, help="control steps per evaluation episode")
     ap.add_argument("--device", default="cpu", help="cpu | cuda")
     ap.add_argument("--threads", type=int, default=None,
                     help="torch CPU threads for training (default 1 on CPU: on a busy 2-core machine 2 threads spin ~8x the CPU time)")

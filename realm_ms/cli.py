@@ -6,8 +6,8 @@ imported (``realm --help`` lists the commands from ``COMMANDS`` alone), and modu
 imports (torch, sapien, mani_skill) inside their handlers, so help is instant (a test checks it). The
 ``REALM-*`` envs are registered before a handler runs, unless its parser says
 ``set_defaults(needs_envs=False)`` (sysid, assets). Bad input ends in one line on stderr and exit
-code 2: ``UserError`` from handlers, ``realm_ms.validate.InputError`` (and its subclasses, e.g. the
-sysid ``DataError``) from anything below them.
+code 2: ``realm_ms.errors.UserError``, raised by handlers, and ``realm_ms.validate.InputError``
+(a ``ValueError``; e.g. the sysid ``DataError``), raised by the shared checks below them.
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         register_envs()
     try:
         return int(args.func(args) or 0)
-    except (UserError, InputError) as e:
+    except (UserError, InputError) as e:  # InputError: the shared checks, incl. the sysid DataError
         msg = " ".join(str(e).split()) or type(e).__name__  # always one line
         print(f"{_prog(parser, argv)}: error: {msg}", file=sys.stderr)
         return 2

@@ -59,7 +59,9 @@ def run(args) -> int:
     proto = PRESETS["quick"].with_overrides(episodes=args.episodes, max_steps=args.max_steps)
     print(f"realm demo: {len(args.tasks)} task(s) x {', '.join(perts)} x {args.episodes} episode(s)")
     reports = []
-    evaluate("expert", args.tasks, perts, proto, args.out / "expert", workers=args.workers, videos="none" if args.no_video else "all")
+    # 160x90 camera frames keep CPU rendering (lavapipe) to a few minutes for the whole demo
+    evaluate("expert", args.tasks, perts, proto, args.out / "expert", workers=args.workers, camera_size=(160, 90),
+             videos="none" if args.no_video else "all")
     reports.append(("scripted expert", write_report(args.out / "expert", args.out / "expert" / "report.html", videos="all")))
     ckpt = args.out / "tiny_act"
     if not (ckpt / "config.json").exists():

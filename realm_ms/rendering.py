@@ -79,11 +79,6 @@ def cuda_available() -> bool:
         return False
 
 
-def optix_available() -> bool:
-    """Kept for callers of the old API: true when the OptiX denoiser passes its probe."""
-    return probe_denoiser("optix").ok
-
-
 @functools.cache
 def probe_denoiser(denoiser: str, timeout_s: float = 180.0) -> ProbeResult:
     """Render a tiny path-traced frame with and without ``denoiser`` in a child process (a failing
@@ -154,7 +149,8 @@ def camera_shader_config(shader: str = "default", denoiser: str = "auto"):
     if is_ray_traced(shader):
         cfg.shader_pack_config["ray_tracing_denoiser"] = resolve_denoiser(denoiser)
         if _RT_SPP_OVERRIDE:
-            cfg.shader_pack_config["ray_tracing_samples_per_pixel"] = _RT_SPP_OVERRIDE[-1]
+            spp = cfg.shader_pack_config["ray_tracing_samples_per_pixel"]
+            cfg.shader_pack_config["ray_tracing_samples_per_pixel"] = min(spp, _RT_SPP_OVERRIDE[-1])
     return cfg
 
 
@@ -172,11 +168,6 @@ def rt_samples_per_pixel(spp: int):
         yield
     finally:
         _RT_SPP_OVERRIDE.pop()
-
-
-def shader_config(name: str, denoiser: str = "auto"):
-    """Alias of :func:`camera_shader_config` (older call sites)."""
-    return camera_shader_config(name, denoiser)
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,8 @@ from typing import Any, Callable
 
 
 class InputError(ValueError):
-    """Bad user input; the message names what is wrong and where (flag, field or file)."""
+    """Bad user input; the message names what is wrong and where (flag, field or file). The
+    ``realm`` command prints it like a ``UserError`` (one line, exit code 2)."""
 
 
 def _units(unit: str) -> str:

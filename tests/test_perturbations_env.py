@@ -3,6 +3,8 @@ nothing compounds across resets, compositions apply both, records replay, ``info
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -89,6 +91,7 @@ def test_state_effects(state_env, name):
     got = {k for k in changed(snapshot(state_env), base) if not k.startswith(("camera/", "lights"))}  # see test_visual_effects
     rec = info["perturbation"]
     assert rec["names"] == [name] and rec["ids"] == [NAMES.index(name)] and rec["episode_seed"] == [3]
+    json.loads(json.dumps(rec))  # a plain JSON record (results files store it)
     if name.startswith("S-"):
         assert got == {"instruction"}
         assert rec["params"][0][name]["instruction"] == state_env.unwrapped.instruction

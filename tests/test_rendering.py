@@ -112,3 +112,15 @@ def test_realm_light_mapping():
     np.testing.assert_allclose(warm, np.array(rendering.REALM_LIGHT_COLOR) / 255)
     with pytest.raises(ValueError):
         rendering.realm_light_to_scene(-1.0)
+
+
+def test_rt_samples_cap():
+    with rendering.rt_samples_per_pixel(4):
+        fast = rendering.camera_shader_config("rt-fast", "none").shader_pack_config
+        full = rendering.camera_shader_config("rt", "none").shader_pack_config
+    assert fast["ray_tracing_samples_per_pixel"] == 2 and full["ray_tracing_samples_per_pixel"] == 4
+    assert full["ray_tracing_path_depth"] == 16  # only the samples are capped
+    assert rendering.camera_shader_config("rt", "none").shader_pack_config["ray_tracing_samples_per_pixel"] == 32
+    with pytest.raises(ValueError):
+        with rendering.rt_samples_per_pixel(0):
+            pass

@@ -81,6 +81,8 @@ def make_env(task: str, perturbation: str, cfg: RunConfig):
     )
     kw.update(cfg.env_kwargs)
     if perturbation != DEFAULT:
+        import realm_ms.perturbations  # noqa: F401  (installs the env's perturbation resolver in this process)
+
         kw["perturbation"] = perturbation
     return gym.make(task, **kw)
 

@@ -34,18 +34,18 @@ def gaussian_kernels(sigmas: torch.Tensor, size: int = MAX_K) -> torch.Tensor:
 
 
 def blur_contrast(img: torch.Tensor, sigma: torch.Tensor, alpha: torch.Tensor) -> torch.Tensor:
-    """img (B, H, W, C) uint8 -> same dtype; per-image sigma and alpha (B,)."""
-    b, h, w, c = img.shape
-    x = img.permute(0, 3, 1, 2).float().reshape(1, b * c, h, w)
-    k = gaussian_kernels(sigma.to(img.device)).repeat_interleave(c, dim=0)  # (B*C, K)
+    """img (B, H, W, C) uint8 -> same dtype; per-image sigma and alpha (B,). Separable blur as a
+    sum of shifted slices (11 taps), far faster on CPU than a grouped convolution."""
+    x = img.float().permute(0, 3, 1, 2)  # (B, C, H, W)
+    k = gaussian_kernels(sigma.to(img.device))[:, :, None, None, None]  # (B, K, 1, 1, 1)
     p = MAX_K // 2
-    x = F.pad(x, (p, p, 0, 0), mode="reflect")  # OpenCV's default border (reflect-101)
-    x = F.conv2d(x, k[:, None, None, :], groups=b * c)
-    x = F.pad(x, (0, 0, p, p), mode="reflect")
-    x = F.conv2d(x, k[:, None, :, None], groups=b * c)
-    x = x.reshape(b, c, h, w).permute(0, 2, 3, 1)
+    h, w = x.shape[-2:]
+    xp = F.pad(x, (p, p, 0, 0), mode="reflect")  # OpenCV's default border (reflect-101)
+    x = sum(k[:, t] * xp[..., t : t + w] for t in range(MAX_K))
+    xp = F.pad(x, (0, 0, p, p), mode="reflect")
+    x = sum(k[:, t] * xp[..., t : t + h, :] for t in range(MAX_K))
     x = x.round() * alpha.to(img.device).float()[:, None, None, None]
-    return x.clamp(0, 255).to(img.dtype)
+    return x.clamp(0, 255).to(img.dtype).permute(0, 2, 3, 1)
 
 
 class VAug(Perturbation):

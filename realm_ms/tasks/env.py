@@ -197,7 +197,6 @@ class RealmEnv(BaseEnv):
         targets = spec.by_role("target")
         self.target = self.objects[targets[0].name] if targets else None
         self.tracker = ProgressionTracker(spec.skill, self.num_envs, self.device, self.thresholds)
-        self.nominal_masses = {k: o.entity.mass.clone() for k, o in self.objects.items() if not o.is_articulated}
 
     def _load_lighting(self, options: dict):
         self.scene_def.load_lighting(self)
@@ -332,13 +331,12 @@ class RealmEnv(BaseEnv):
         """``options``: ``perturbation`` switches the perturbation from this reset on,
         ``perturbation_params`` replays a recorded ``info["perturbation"]["params"]``."""
         options = dict(options or {})
-        was = self.perturbations.needs_reconfigure
         if "perturbation" in options:
             self.perturbation_spec = options["perturbation"]
             self.perturbations = resolve_perturbations(options["perturbation"])
             options["reconfigure"] = True  # back to (or away from) the pristine scene
         self.perturbations.override = options.get("perturbation_params")
-        if self.perturbations.needs_reconfigure or (was and not self.perturbations.needs_reconfigure and "perturbation" in options):
+        if self.perturbations.needs_reconfigure:
             options["reconfigure"] = True  # scene-changing draws rebuild the scene every reset
         if self.config.isolate_episodes and self._contacts_dirty and not self.gpu_sim_enabled and "env_idx" not in options:
             options["reconfigure"] = True  # a new PhysX scene: see RealmEnvConfig.isolate_episodes

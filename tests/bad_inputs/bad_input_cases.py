@@ -386,6 +386,8 @@ def _home_action(**changes):
 CASES += [
     Case("env-camera-width-0", call=_make(camera_width=0), error=r"camera_width", env=True),
     Case("env-camera-width-neg", call=_make(camera_width=-64), error=r"camera_width", env=True),
+    Case("env-robot-model-physics-hz-0", call=_make(robot_model={"physics_hz": 0}), error=r"physics_hz: must be a positive", env=True),
+    Case("env-robot-model-effects-string", call=_make(robot_model={"effects": "latency"}), error=r"effects: expected a list", env=True),
     Case("env-unknown-perturbation", call=_make(perturbation="NoSuchPerturbation"), error=r"unknown perturbation 'NoSuchPerturbation'", env=True),
     Case("env-action-inf", call=_step(lambda: _home_action(j0=float("inf"))), error=r"action", env=True, warn_ok=True),
     Case("env-action-100-rad", call=_step(lambda: _home_action(j3=100.0)), error=r"action|joint|limit", env=True, warn_ok=True),

@@ -21,19 +21,19 @@ POLICIES: Registry = Registry("policy")
 
 
 def _register_builtins() -> None:
+    # importing a module registers its kinds (idempotent: modules import once); lerobot is imported
+    # lazily inside its factory's policy class, so this stays light
     from realm_ms.eval.policies import baselines, expert, lerobot, openpi  # noqa: F401
 
 
 def make_policy(spec: str, **options) -> Policy:
     """Build a policy from its spec string (``kind`` or ``kind:arg``); unknown kinds list the known ones."""
-    if not POLICIES.names():
-        _register_builtins()
+    _register_builtins()
     kind, _, arg = spec.partition(":")
     factory = POLICIES.get(kind)
     return factory(arg or None, **options)
 
 
 def policy_names() -> list[str]:
-    if not POLICIES.names():
-        _register_builtins()
+    _register_builtins()
     return POLICIES.names()
