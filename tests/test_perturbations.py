@@ -14,7 +14,7 @@ pytest.importorskip("mani_skill")
 
 import realm_ms  # noqa: E402,F401
 from realm_ms.perturbations import PERTURBATIONS, PerturbationSet, all_perturbations  # noqa: E402
-from realm_ms.perturbations.v_aug import blur_contrast, gaussian_kernels  # noqa: E402
+from realm_ms.perturbations.v_aug import blur_contrast, blur_contrast_torch, gaussian_kernels  # noqa: E402
 from realm_ms.registry import UnknownNameError  # noqa: E402
 from realm_ms.tasks import TASKS  # noqa: E402
 
@@ -173,9 +173,12 @@ def test_v_aug_blur_and_contrast():
     lap = lambda x: (x[1:-1, 1:-1].float() * 4 - x[:-2, 1:-1] - x[2:, 1:-1] - x[1:-1, :-2] - x[1:-1, 2:]).var()  # noqa: E731
     assert lap(out[2]) < 0.1 * lap(img[2])  # blurred: high frequencies gone
     assert abs(out[2].float().mean() - img[2].float().mean()) < 2.0  # blur keeps the mean
-    # batched == one by one, and the kernel is OpenCV's: odd int(4 sigma + 1) taps
+    # batched == one by one; the torch (GPU) path matches OpenCV's within uint8 rounding
     one = blur_contrast(img[2:3], torch.tensor([2.0]), torch.tensor([1.0]))
     assert torch.equal(one[0], out[2])
+    both = blur_contrast_torch(img, torch.tensor([0.0, 0.0, 2.0]), torch.tensor([1.0, 0.5, 1.0]))
+    assert (both.int() - out.int()).abs().max() <= 1
+    # the kernel is OpenCV's: odd int(4 sigma + 1) taps
     k = gaussian_kernels(torch.tensor([1.0]))[0]
     assert int((k > 0).sum()) == 5 and abs(float(k.sum()) - 1) < 1e-6
 

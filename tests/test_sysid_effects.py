@@ -86,13 +86,15 @@ def nominal(sim, commands):
 @pytest.mark.parametrize("name", NAMES)
 def test_off_is_nominal_and_nominal_strength_changes_motion(sim, commands, nominal, name):
     off = _roll(sim, commands, [make_effect(name)])
-    np.testing.assert_allclose(off, nominal, atol=1e-6)  # float32 PhysX
+    # float32 PhysX; the step-exact law divides position errors by h^2, so ULP-level differences
+    # (re-applied build properties) grow to ~2e-6 rad over 10 s
+    np.testing.assert_allclose(off, nominal, atol=1e-5)
     on = parse_effects(name, default_values="nominal")
     moved = _roll(sim, commands, on)
     assert np.all(np.isfinite(moved))
     assert np.abs(moved - nominal).max() > 5e-4, f"{name} at its typical strength leaves no trace"
     # build-time effects are reset between rollouts
-    np.testing.assert_allclose(_roll(sim, commands, []), nominal, atol=1e-6)
+    np.testing.assert_allclose(_roll(sim, commands, []), nominal, atol=1e-5)
 
 
 def test_batched_rows_equal_single_runs(sim, commands):

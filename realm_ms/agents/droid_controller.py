@@ -323,13 +323,16 @@ class DroidArmDriver:
 
     # ------------------------------------------------------------------ numpy fast path (CPU, few envs)
     NUMPY_MAX_ENVS = 16
+    # set by the ManiSkill binding (the benchmark's CPU env); the sysid replay stays on float32 torch
+    # so a model with effects at their off-values replays bit-for-bit like the nominal one
+    allow_numpy = False
 
     def _numpy_path(self) -> bool:
-        """The nominal exact law on CPU for a few envs runs in numpy (eager torch costs ~5x more per
-        tiny op); batched torch stays the path for GPU, many envs and actuation stages."""
+        """The nominal exact law on CPU for a few envs runs in numpy (eager torch costs ~2x more on
+        these tiny ops); batched torch stays the path for GPU, many envs and actuation stages."""
         c = self.config
-        return (self.device.type == "cpu" and not self.actuation and c.integrator == "exact"
-                and c.model_rate == "physics" and self.num_envs <= self.NUMPY_MAX_ENVS)
+        return (self.allow_numpy and self.device.type == "cpu" and not self.actuation and c.integrator == "exact"
+                and self.num_envs <= self.NUMPY_MAX_ENVS)
 
     def torque_numpy(self, q: np.ndarray, qd: np.ndarray, dt: float) -> np.ndarray:
         """``torque`` for the nominal exact law, in float64 numpy (same equations)."""
@@ -345,26 +348,32 @@ class DroidArmDriver:
         n = q.shape[1]
         vc = self.velocity_correction.double().numpy()
         qd_held, qd = qd, qd + vc
-        frames = npm.link_frames(q)
-        jac = npm.jacobian(frames)
-        jt = jac.transpose(0, 2, 1)
-        kp = k["kq"][:, :, None] * np.eye(n) + jt @ (k["kx"][..., None] * jac)
-        kd = k["kqd"][:, :, None] * np.eye(n) + jt @ (k["kxd"][..., None] * jac)
-        bias, mass = npm.bias_and_mass(frames, qd if cfg.coriolis_feedforward else np.zeros_like(qd), cfg.gravity_compensation)
-        if not (cfg.coriolis_feedforward or cfg.gravity_compensation):
-            bias = np.zeros_like(q)
-        mass = mass + k["arm"]
-        minv = np.linalg.inv(mass)
         ticks = max(1, round(dt * cfg.law_hz))
         t = dt / ticks
-        p_, d_ = minv @ kp, minv @ kd
-        eye = k.setdefault("eye", np.eye(n))
-        phi = np.empty((q.shape[0], 2 * n, 2 * n))
-        phi[:, :n, :n] = eye - 0.5 * t * t * p_
-        phi[:, :n, n:] = t * eye - 0.5 * t * t * d_
-        phi[:, n:, :n] = -t * p_
-        phi[:, n:, n:] = eye - t * d_
-        phi = np.linalg.matrix_power(phi, ticks)
+        if cfg.model_rate == "physics" or self._terms is None:
+            frames = npm.link_frames(q)
+            jac = npm.jacobian(frames)
+            jt = jac.transpose(0, 2, 1)
+            kp = k["kq"][:, :, None] * np.eye(n) + jt @ (k["kx"][..., None] * jac)
+            kd = k["kqd"][:, :, None] * np.eye(n) + jt @ (k["kxd"][..., None] * jac)
+            bias, mass = npm.bias_and_mass(frames, qd if cfg.coriolis_feedforward else np.zeros_like(qd), cfg.gravity_compensation)
+            if not (cfg.coriolis_feedforward or cfg.gravity_compensation):
+                bias = np.zeros_like(q)
+            mass = mass + k["arm"]
+            minv = np.linalg.inv(mass)
+            p_, d_ = minv @ kp, minv @ kd
+            eye = k.setdefault("eye", np.eye(n))
+            phi = np.empty((q.shape[0], 2 * n, 2 * n))
+            phi[:, :n, :n] = eye - 0.5 * t * t * p_
+            phi[:, :n, n:] = t * eye - 0.5 * t * t * d_
+            phi[:, n:, :n] = -t * p_
+            phi[:, n:, n:] = eye - t * d_
+            phi = np.linalg.matrix_power(phi, ticks)
+            if cfg.model_rate == "control":  # refreshed per target, gravity to first order in between
+                self._terms = (kp, kd, bias, mass, minv, phi, q.copy(), self._gravity_jacobian_numpy(q))
+        else:
+            kp, kd, bias, mass, minv, phi, q_ref, dg = self._terms
+            bias = bias + (dg @ (q - q_ref)[..., None])[..., 0]
         err = q - self.q_target.double().numpy()
         ext = self.plant_prev.double().numpy()
         e_star = np.linalg.solve(kp, ext[..., None])[..., 0]
@@ -395,6 +404,17 @@ class DroidArmDriver:
         self.plant_prev = torch.from_numpy((out - clamped).astype(np.float32))
         self.time = self.time + dt
         return out
+
+    def _gravity_jacobian_numpy(self, q: np.ndarray, eps: float = 1e-3) -> np.ndarray:
+        """``_gravity_jacobian`` in numpy: d g / d q (B, n, n) by central differences."""
+        b, n = q.shape
+        if not self.config.gravity_compensation:
+            return np.zeros((b, n, n))
+        npm = self._np["model"]
+        d = eps * np.eye(n)
+        qs = np.concatenate([(q[:, None] + d).reshape(-1, n), (q[:, None] - d).reshape(-1, n)])
+        g = npm.rnea(npm.link_frames(qs), np.zeros_like(qs)).reshape(2, b, n, n)
+        return ((g[0] - g[1]) / (2 * eps)).transpose(0, 2, 1)
 
     def _plant_mass(self, q: torch.Tensor, frames: torch.Tensor, state) -> tuple[torch.Tensor, torch.Tensor]:
         """(M, M^-1): the model's inertia plus what the driver knows of the plant's (joint armature,
@@ -507,6 +527,7 @@ class DroidJointImpedanceController(BaseController):
         self._dt = 1.0 / (self._sim_steps * control_freq)
         self.actuation = ActuationModel()
         self.driver = DroidArmDriver(config.model_factory(), config.control, scene.num_envs, self.device, self.actuation)
+        self.driver.allow_numpy = True
         self._idx = self.active_joint_indices
         self._qf_cpu = None  # reusable qf buffer (CPU backend)
 

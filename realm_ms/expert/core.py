@@ -88,6 +88,9 @@ def make_expert(env, skill: str | None = None, **kw) -> Expert:
 def run_episode(env, seed: int, max_steps: int | None = None, expert: Expert | None = None, on_step=None) -> dict:
     """Reset ``env`` (num_envs = 1) with ``seed`` and run the expert until the episode ends.
 
+    A minimal helper for the expert's own tests (this layer sits below ``realm_ms.eval``): every
+    evaluation, the expert bench and ``realm demo`` run episodes through ``realm_ms.eval.runner``.
+
     Returns ``dict(progression, success, stalled_stage, steps, log)``."""
     obs, _ = env.reset(seed=seed)
     u = env.unwrapped

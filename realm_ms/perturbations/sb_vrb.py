@@ -20,6 +20,7 @@ from dataclasses import replace
 
 from realm_ms.perturbations.base import Perturbation
 from realm_ms.perturbations.common import WIDE_REGION, cap_scale, widened, main_noun, sample_ids, set_query, target_noun, with_object
+from realm_ms.tasks.skills import as_skill
 from realm_ms.tasks.spec import SceneObject
 
 VERBS = {
@@ -71,7 +72,7 @@ class SbVrb(Perturbation):
             opening = verb == "open_drawer"
             spec = with_object(spec, main.name, asset=set_query(main.asset, open=0 if opening else 1))
             text = spec.instruction.replace("close" if opening else "open", "open" if opening else "close", 1)
-            return replace(spec, skill=verb, instruction=text)
+            return replace(spec, skill=as_skill(verb), instruction=text)
         if verb == "push_off":
             spec = with_object(spec, main.name, asset=set_query(main.asset, on=1, goal="off"))
             return replace(spec, instruction=spec.instruction.replace("push", "turn off", 1))
@@ -93,4 +94,4 @@ class SbVrb(Perturbation):
             objs = [replace(o, role="distractor") if o.role == "target" else o for o in objs]
         else:
             y = target_noun(spec)
-        return replace(spec, objects=tuple(objs), skill=verb, instruction=sentence(verb, x, y))
+        return replace(spec, objects=tuple(objs), skill=as_skill(verb), instruction=sentence(verb, x, y))

@@ -7,6 +7,7 @@ all sub-envs with a per-sub-env kernel (zero weights outside each sub-env's own 
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 import torch.nn.functional as F
 
@@ -34,8 +35,26 @@ def gaussian_kernels(sigmas: torch.Tensor, size: int = MAX_K) -> torch.Tensor:
 
 
 def blur_contrast(img: torch.Tensor, sigma: torch.Tensor, alpha: torch.Tensor) -> torch.Tensor:
-    """img (B, H, W, C) uint8 -> same dtype; per-image sigma and alpha (B,). Separable blur as a
-    sum of shifted slices (11 taps), far faster on CPU than a grouped convolution."""
+    """img (B, H, W, C) uint8 -> same dtype; per-image sigma and alpha (B,). CPU tensors go through
+    OpenCV (REALM's own ``cv2.GaussianBlur``; torch's threads are slow on a busy CPU), others
+    through the batched torch path (same kernel; uint8 rounding may differ by 1)."""
+    if img.device.type == "cpu":
+        try:
+            import cv2
+        except ImportError:
+            return blur_contrast_torch(img, sigma, alpha)
+        out = img.numpy().copy()
+        for i, (s, a) in enumerate(zip(sigma.tolist(), alpha.tolist())):
+            if s > 0:
+                k = kernel_size(s)
+                out[i] = cv2.GaussianBlur(out[i], (k, k), s)
+            out[i] = np.clip(out[i].astype(np.float32) * a, 0, 255).astype(np.uint8)
+        return torch.from_numpy(out)
+    return blur_contrast_torch(img, sigma, alpha)
+
+
+def blur_contrast_torch(img: torch.Tensor, sigma: torch.Tensor, alpha: torch.Tensor) -> torch.Tensor:
+    """The batched torch path: separable blur as a sum of shifted slices (11 taps)."""
     x = img.float().permute(0, 3, 1, 2)  # (B, C, H, W)
     k = gaussian_kernels(sigma.to(img.device))[:, :, None, None, None]  # (B, K, 1, 1, 1)
     p = MAX_K // 2
@@ -60,7 +79,13 @@ class VAug(Perturbation):
     def on_observation(self, env, sensor_data, params):
         sigma = torch.tensor([p["sigma"] for p in params])
         alpha = torch.tensor([p["alpha"] for p in params])
-        for cam in sensor_data.values():
-            if "rgb" in cam:
-                cam["rgb"] = blur_contrast(cam["rgb"], sigma, alpha)
+        cams = [c for c in sensor_data.values() if "rgb" in c]
+        by_shape: dict = {}
+        for c in cams:  # one batched pass per image size (all cameras share it by default)
+            by_shape.setdefault(tuple(c["rgb"].shape), []).append(c)
+        for group in by_shape.values():
+            n = len(group)
+            out = blur_contrast(torch.cat([c["rgb"] for c in group]), sigma.repeat(n), alpha.repeat(n))
+            for c, img in zip(group, out.chunk(n)):
+                c["rgb"] = img
         return sensor_data
