@@ -3,7 +3,7 @@ PY := .venv/bin/python
 export MS_SKIP_ASSET_DOWNLOAD_PROMPT := 1
 export PYTHONUNBUFFERED := 1
 
-.PHONY: setup demo test test-slow bench bench-expert bench-assets bench-sysid train-eval-demo asset-sources catalog clean
+.PHONY: setup demo test test-slow bench bench-expert bench-assets bench-sysid bench-eval train-eval-demo asset-sources catalog clean
 
 setup:
 	@bash scripts/setup.sh
@@ -28,6 +28,9 @@ bench-assets: setup
 
 bench-sysid: setup
 	$(PY) bench/sysid.py
+
+bench-eval: setup
+	$(PY) bench/eval_throughput.py
 
 # export expert demos -> lerobot-train a small ACT -> realm eval (Default + V-AUG) -> report
 train-eval-demo: setup

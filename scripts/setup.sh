@@ -79,6 +79,9 @@ install_venv() {
   # metadata-only distribution named lerobot_env_*: LeRobot auto-imports such distributions, which
   # registers the `realm` env type for `lerobot-eval --env.type=realm` (docs/lerobot.md)
   .venv/bin/python -m pip install -q --no-deps ./lerobot_env_realm/_distribution
+  # the wire-compatibility tests of our openpi client talk to the reference client; it pins numpy<2
+  # for its own extras only, so it is installed without its dependencies
+  .venv/bin/python -m pip install -q --no-deps "openpi-client==0.1.2"
   echo "$want" > "$stamp"
 }
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -355,9 +355,4 @@ def default_workers() -> int:
     return max(1, min(os.cpu_count() or 1, 16))
 
 
-def record_to_summary(rec: dict) -> dict:
-    """The fields the expert bench and demo print."""
-    return {k: rec.get(k) for k in ("task", "perturbation", "seed", "progression", "success", "stalled_stage", "steps", "wall_s")}
-
-
-__all__ = ["RunConfig", "EpisodeRunner", "run_plan", "make_env", "Progress", "asdict"]
+__all__ = ["RunConfig", "EpisodeRunner", "run_plan", "make_env", "Progress", "default_workers"]

@@ -67,7 +67,14 @@ class Perturbation:
         return pose
 
     def describe(self) -> dict:
-        return dict(id=self.pid, name=self.name, reconfigure=self.reconfigure, acts_on=self.acts_on, ranges=self.ranges)
+        return dict(id=self.pid, name=self.name, reconfigure=self.reconfigure, when=self.when, acts_on=self.acts_on, ranges=self.ranges)
+
+    @property
+    def when(self) -> str:
+        """Where it acts: ``reconfigure`` (scene rebuilt), ``observation`` or ``episode`` (init)."""
+        if self.reconfigure:
+            return "reconfigure"
+        return "observation" if type(self).on_observation is not Perturbation.on_observation else "episode"
 
     def __repr__(self) -> str:
         return f"<perturbation {self.pid} {self.name}>"

@@ -41,8 +41,7 @@ def _list(args) -> int:
         return 0
     print(f"{'id':>2s}  {'name':9s} {'when':12s} {'changes':60s} ranges")
     for r in rows:
-        when = "reconfigure" if r["reconfigure"] else "episode/obs"
-        print(f"{r['id']:2d}  {r['name']:9s} {when:12s} {r['acts_on'][:60]:60s} {r['ranges']}")
+        print(f"{r['id']:2d}  {r['name']:9s} {r['when']:12s} {r['acts_on'][:60]:60s} {r['ranges']}")
     return 0
 
 
