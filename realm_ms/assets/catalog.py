@@ -13,6 +13,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from asset_pipeline.record import CATALOG_FILE, CatalogRecord, read_catalog
+from realm_ms.registry import Registry
 from realm_ms.assets.paths import cache_dir, default_catalog_dir
 from realm_ms.assets.spec import ObjectSpec
 
@@ -177,7 +178,7 @@ def load_catalog(path: str | Path | None = None) -> BuiltCatalog | ProceduralCat
 
 # id prefix -> resolver(oid) -> ObjectSpec, for ids outside procedural/built catalogs; modules
 # register themselves (``real/``: default-installed real meshes, ``realm_ms.assets.real_objects``)
-ID_RESOLVERS: dict = {}
+ID_RESOLVERS: Registry = Registry("object id prefix")
 
 
 def get_object_spec(oid: str, catalog: BuiltCatalog | ProceduralCatalog | str | Path | None = None) -> ObjectSpec:

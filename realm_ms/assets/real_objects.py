@@ -135,4 +135,4 @@ def _fitted(obj: RealObject, ref: ObjectSpec, root: Path) -> ObjectSpec:
     return ObjectSpec(rec, folder)
 
 
-ID_RESOLVERS[PREFIX] = real_object_spec
+ID_RESOLVERS.register(PREFIX, real_object_spec)
