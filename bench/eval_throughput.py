@@ -82,7 +82,7 @@ def bench_realm(n: int, seconds: float, task: str, width: int, height: int) -> f
     import numpy as np
 
     from realm_ms.eval.policies import ObsRequest, make_policy
-    from realm_ms.eval.policies.base import PolicyInput
+    from realm_ms.eval.policies.policy import PolicyInput
     from realm_ms.eval.protocol import EpisodeKey
     from realm_ms.eval.runner import RunConfig
     from realm_ms.eval.workers import ProcessBackend

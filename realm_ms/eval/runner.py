@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from realm_ms.eval.policies.base import ObsRequest, PolicyInput
+from realm_ms.eval.policies.policy import ObsRequest, PolicyInput
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
 
 VIDEO_CAMERAS = ("exterior_1", "wrist")

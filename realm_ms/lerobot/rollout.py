@@ -51,7 +51,7 @@ class ChunkedPolicy:
     """A ``realm eval`` policy (batched, action chunks) as a per-step actor on one env."""
 
     def __init__(self, policy, env, replan_every: int = 8):
-        from realm_ms.eval.policies.base import CAMERAS
+        from realm_ms.eval.policies.policy import CAMERAS
 
         self.policy, self.env, self.replan_every = policy, env.unwrapped, int(replan_every)
         self.cameras = tuple(policy.obs_request().cameras) or CAMERAS
@@ -62,7 +62,7 @@ class ChunkedPolicy:
         self.policy.reset([0])
 
     def act(self, obs):
-        from realm_ms.eval.policies.base import PolicyError, PolicyInput
+        from realm_ms.eval.policies.policy import PolicyError, PolicyInput
 
         if not self.queue:
             batch = PolicyInput(

@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from realm_ms.perturbations.base import Perturbation
-from realm_ms.perturbations.common import WIDE_REGION, cap_scale, widened, categories_of, object_spec, sample_ids
+from realm_ms.perturbations.common import cap_scale, widened, categories_of, object_spec, sample_ids
 from realm_ms.tasks.spec import SceneObject
 
 N_EXTRA = 3
@@ -49,13 +49,15 @@ class VSc(Perturbation):
         for o in spec.objects:
             if o.name in params["swaps"]:
                 a = params["swaps"][o.name]
-                o = replace(o, asset=a, role="distractor", pose=None, fixed=False, region=o.region or WIDE_REGION, scale=cap_scale(a, MAX_EXTENT))
+                o = replace(o, asset=a, role="distractor", pose=None, fixed=False, region=o.region, scale=cap_scale(a, MAX_EXTENT))
             objs.append(o)
         drawer = spec.skill in ("open_drawer", "close_drawer")
         for k, a in enumerate(params["extras"]):
-            region = DRAWER_SIDES[k % 2] if drawer else WIDE_REGION
+            region = DRAWER_SIDES[k % 2] if drawer else None  # None: the (widened) spawn region
             objs.append(SceneObject(f"clutter_{k}", a, region=region, scale=cap_scale(a, MAX_EXTENT)))
-        return replace(widened(spec), objects=tuple(objs))
+        # 3 more objects on the same table: a tighter gap keeps the layout feasible (REALM dropped
+        # objects from above instead)
+        return replace(widened(spec), objects=tuple(objs), min_separation=min(spec.min_separation, 0.005))
 
 
 def seen_themes() -> tuple[str, ...]:

@@ -6,7 +6,7 @@ the text before the first ``:`` names a registry entry, the rest is its argument
 
 from __future__ import annotations
 
-from realm_ms.eval.policies.base import (  # noqa: F401
+from realm_ms.eval.policies.policy import (  # noqa: F401
     CAMERAS,
     ObsRequest,
     Policy,

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from realm_ms.eval.policies import POLICIES
-from realm_ms.eval.policies.base import Policy, PolicyInput, PolicyOutput
+from realm_ms.eval.policies.policy import Policy, PolicyInput, PolicyOutput
 
 # droid_joint_pos bounds (Panda joint limits + gripper [0, 1])
 Q_LOW = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973, 0.0], dtype=np.float32)

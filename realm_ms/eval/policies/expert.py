@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from realm_ms.eval.policies import POLICIES
-from realm_ms.eval.policies.base import Policy
+from realm_ms.eval.policies.policy import Policy
 
 
 class ExpertPolicy(Policy):

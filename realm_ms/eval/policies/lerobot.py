@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from realm_ms.eval.policies import POLICIES
-from realm_ms.eval.policies.base import CAMERAS, ObsRequest, Policy, PolicyInput, PolicyOutput
+from realm_ms.eval.policies.policy import CAMERAS, ObsRequest, Policy, PolicyInput, PolicyOutput
 
 IMAGE_PREFIX = "observation.images."
 

@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from realm_ms.eval.policies import POLICIES
-from realm_ms.eval.policies.base import ObsRequest, Policy, PolicyInput, PolicyOutput
+from realm_ms.eval.policies.policy import ObsRequest, Policy, PolicyInput, PolicyOutput
 from realm_ms.eval.policies.openpi_wire import packb, resize_with_pad, unpackb
 
 FORMATS = ("pi0", "groot")

@@ -7,7 +7,7 @@ Frame convention: the robot base is the world origin, x forward, z up; the table
 
 from __future__ import annotations
 
-from realm_ms.tasks.scenes.base import SCENES, TabletopScene, register_scene  # noqa: F401
+from realm_ms.tasks.scenes.scene import SCENES, TabletopScene, register_scene  # noqa: F401
 from realm_ms.tasks.scenes import studio  # noqa: F401  (registers its scenes)
 from realm_ms.tasks.scenes import household  # noqa: F401  (kitchen, dining_room, office, living_room, pomaria)
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import sapien
 
-from realm_ms.tasks.scenes.base import TabletopScene, add_box, add_lights, material, register_scene
+from realm_ms.tasks.scenes.scene import TabletopScene, add_box, add_lights, material, register_scene
 from realm_ms.tasks.scenes import textures as tx
 
 

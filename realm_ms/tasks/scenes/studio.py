@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import sapien
 
-from realm_ms.tasks.scenes.base import TabletopScene, add_box, add_lights, material, register_scene
+from realm_ms.tasks.scenes.scene import TabletopScene, add_box, add_lights, material, register_scene
 
 
 @dataclass(frozen=True)
