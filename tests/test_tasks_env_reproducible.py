@@ -11,7 +11,7 @@ import torch
 
 import realm_ms  # noqa: F401
 from realm_ms.expert.core import make_expert
-from realm_ms.tasks.spec import TASKS
+from realm_ms.tasks.task_spec import TASKS
 
 STEPS = 60  # enough for the expert to reach and touch/grasp in every task
 

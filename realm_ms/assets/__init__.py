@@ -36,7 +36,7 @@ from realm_ms.assets.catalog import (
 from realm_ms.assets.loader import build_actor, make_cpu_scene
 from realm_ms.assets import real_objects  # noqa: F401  (registers "real/<noun>" ids)
 from realm_ms.assets.sampler import categories, describe, sample_objects
-from realm_ms.assets.spec import ObjectSpec
+from realm_ms.assets.object_spec import ObjectSpec
 from realm_ms.assets.task_objects import TASK_OBJECTS, task_object_spec
 
 __all__ = [

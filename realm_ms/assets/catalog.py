@@ -15,7 +15,7 @@ from pathlib import Path
 from asset_pipeline.record import CATALOG_FILE, CatalogRecord, read_catalog
 from realm_ms.registry import Registry
 from realm_ms.assets.paths import cache_dir, default_catalog_dir
-from realm_ms.assets.spec import ObjectSpec
+from realm_ms.assets.object_spec import ObjectSpec
 
 # Variants per procedural category in the default catalog (89 categories x 40 = 3,560 objects).
 PROCEDURAL_VARIANTS = 40

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from realm_ms.assets.spec import ObjectSpec
+from realm_ms.assets.object_spec import ObjectSpec
 
 BODY_TYPES = ("dynamic", "kinematic", "static")
 

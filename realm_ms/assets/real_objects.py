@@ -25,7 +25,7 @@ import numpy as np
 
 from realm_ms.assets.catalog import ID_RESOLVERS, procedural_spec
 from realm_ms.assets.paths import cache_dir
-from realm_ms.assets.spec import ObjectSpec
+from realm_ms.assets.object_spec import ObjectSpec
 
 PREFIX = "real/"
 

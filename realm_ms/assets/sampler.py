@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from realm_ms.assets.catalog import BuiltCatalog, ObjectQuery, ProceduralCatalog, load_catalog
-from realm_ms.assets.spec import ObjectSpec
+from realm_ms.assets.object_spec import ObjectSpec
 
 
 def sample_objects(

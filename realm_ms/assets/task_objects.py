@@ -6,7 +6,7 @@
 from __future__ import annotations
 
 from realm_ms.assets.catalog import get_object_spec
-from realm_ms.assets.spec import ObjectSpec
+from realm_ms.assets.object_spec import ObjectSpec
 
 # noun -> procedural id; sizes (largest extent, m) follow the REALM task configs / real objects.
 TASK_OBJECTS: dict[str, str] = {

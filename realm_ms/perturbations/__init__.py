@@ -9,7 +9,7 @@ registry (names, with the numeric ids as aliases); ``PerturbationSet`` is what a
 from __future__ import annotations
 
 from realm_ms.perturbations.b_hobj import BHobj
-from realm_ms.perturbations.base import DrawContext, Perturbation
+from realm_ms.perturbations.perturbation import DrawContext, Perturbation
 from realm_ms.perturbations.default import Default
 from realm_ms.perturbations.runtime import PerturbationSet
 from realm_ms.perturbations.s_aff import SAff

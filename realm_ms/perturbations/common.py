@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from realm_ms.tasks.spec import SceneObject, TaskSpec
+from realm_ms.tasks.task_spec import SceneObject, TaskSpec
 
 # the instruction's phrase for the main / target object where the slot name is not it
 MAIN_NOUNS = {

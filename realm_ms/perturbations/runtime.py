@@ -13,8 +13,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from realm_ms.perturbations.base import DrawContext, Perturbation
-from realm_ms.tasks.spec import TaskSpec
+from realm_ms.perturbations.perturbation import DrawContext, Perturbation
+from realm_ms.tasks.task_spec import TaskSpec
 
 PerturbationLike = str | int | Perturbation | Sequence
 

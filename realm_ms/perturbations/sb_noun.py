@@ -22,9 +22,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from realm_ms.perturbations.base import Perturbation
+from realm_ms.perturbations.perturbation import Perturbation
 from realm_ms.perturbations.common import graspable, main_noun, object_spec, replace_noun, set_query, slot_noun, with_object
-from realm_ms.tasks.spec import SceneObject
+from realm_ms.tasks.task_spec import SceneObject
 
 DRAWERS = ("middle", "top")
 SWITCH_LOOKS = {1: "black switch", 2: "red switch", 3: "blue switch"}

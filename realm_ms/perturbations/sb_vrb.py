@@ -18,10 +18,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from realm_ms.perturbations.base import Perturbation
+from realm_ms.perturbations.perturbation import Perturbation
 from realm_ms.perturbations.common import WIDE_REGION, cap_scale, widened, main_noun, sample_ids, set_query, target_noun, with_object
 from realm_ms.tasks.skills import as_skill
-from realm_ms.tasks.spec import SceneObject
+from realm_ms.tasks.task_spec import SceneObject
 
 VERBS = {
     "put": ("pick", "rotate", "stack"),

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from realm_ms.perturbations.base import Perturbation
+from realm_ms.perturbations.perturbation import Perturbation
 from realm_ms.perturbations.common import cap_scale, widened, categories_of, object_spec, sample_ids
-from realm_ms.tasks.spec import SceneObject
+from realm_ms.tasks.task_spec import SceneObject
 
 N_EXTRA = 3
 MAX_EXTENT = 0.12  # m

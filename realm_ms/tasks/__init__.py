@@ -17,4 +17,4 @@ from realm_ms.tasks import (  # noqa: F401
 from realm_ms.tasks.config import RealmEnvConfig, make_env  # noqa: F401
 from realm_ms.tasks.env import RealmEnv, register_task  # noqa: F401
 from realm_ms.tasks.skills import Skill  # noqa: F401
-from realm_ms.tasks.spec import TASKS, SceneObject, TaskSpec  # noqa: F401
+from realm_ms.tasks.task_spec import TASKS, SceneObject, TaskSpec  # noqa: F401

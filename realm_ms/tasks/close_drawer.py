@@ -5,7 +5,7 @@ Same cabinet as REALM-OpenDrawer-v1; the top drawer starts fully open (REALM's
 """
 
 from realm_ms.tasks.env import register_task
-from realm_ms.tasks.spec import SceneObject, TaskSpec
+from realm_ms.tasks.task_spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-CloseDrawer-v1",

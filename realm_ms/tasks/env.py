@@ -34,7 +34,7 @@ from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
 from realm_ms.tasks.scenes import get_scene
 from realm_ms.tasks.config import RealmEnvConfig, _control_fields
-from realm_ms.tasks.spec import TASKS, CameraSpec, TaskSpec
+from realm_ms.tasks.task_spec import TASKS, CameraSpec, TaskSpec
 
 def resolve_perturbations(spec):
     """The env's perturbation set; ``realm_ms.perturbations`` installs the resolver (tasks sit below it)."""

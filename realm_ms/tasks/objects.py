@@ -18,7 +18,7 @@ from mani_skill.utils.structs.pose import Pose
 from realm_ms.contacts import any_contact
 from realm_ms.registry import Registry
 from mani_skill.utils.geometry.rotation_conversions import quaternion_apply, quaternion_to_matrix
-from realm_ms.tasks.spec import SceneObject
+from realm_ms.tasks.task_spec import SceneObject
 
 # asset prefix -> builder(env, SceneObject) -> task object (articulated objects register here)
 OBJECT_BUILDERS: Registry[Callable] = Registry("object builder")

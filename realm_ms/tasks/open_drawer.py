@@ -6,7 +6,7 @@ its centre varies by a few centimetres; yaw varies by +-0.15 rad.
 """
 
 from realm_ms.tasks.env import register_task
-from realm_ms.tasks.spec import SceneObject, TaskSpec
+from realm_ms.tasks.task_spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-OpenDrawer-v1",

@@ -1,7 +1,7 @@
 """REALM-PickApple-v1: pick up the apple (REALM skill "pick": REACH -> GRASP -> LIFT_LARGE)."""
 
 from realm_ms.tasks.env import register_task
-from realm_ms.tasks.spec import SceneObject, TaskSpec
+from realm_ms.tasks.task_spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-PickApple-v1",

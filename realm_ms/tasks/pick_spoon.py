@@ -2,7 +2,7 @@
 
 from realm_ms.assets import TASK_OBJECTS as O
 from realm_ms.tasks.env import register_task
-from realm_ms.tasks.spec import SceneObject, TaskSpec
+from realm_ms.tasks.task_spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-PickSpoon-v1",

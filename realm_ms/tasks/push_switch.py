@@ -6,7 +6,7 @@ desk/power-strip rocker) so every task shares the same top-down workspace.
 """
 
 from realm_ms.tasks.env import register_task
-from realm_ms.tasks.spec import SceneObject, TaskSpec
+from realm_ms.tasks.task_spec import SceneObject, TaskSpec
 
 SPEC = TaskSpec(
     env_id="REALM-PushSwitch-v1",

@@ -28,7 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from realm_ms.tasks.spec import TaskSpec
+from realm_ms.tasks.task_spec import TaskSpec
 
 
 @dataclass
