@@ -54,7 +54,7 @@ def test_task_objects_resolve_with_requested_sizes():
     for noun in TASK_OBJECTS:
         assert task_object_spec(noun).collision_path.exists()
     assert abs(task_object_spec("marker").max_extent - 0.17) < 1e-6
-    assert abs(task_object_spec("bowl").max_extent - 0.20) < 1e-6
+    assert abs(task_object_spec("bowl").max_extent - 0.175) < 1e-3  # REALM's bowl, real mesh at its real size
     with pytest.raises(KeyError):
         task_object_spec("unicorn")
 

@@ -1,6 +1,7 @@
 """REALM-PickApple-v1 as a ManiSkill env: spaces, obs modes, rendering, recording, determinism."""
 
 import json
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -182,17 +183,20 @@ def test_scripted_pick_reaches_full_progression():
     env.close()
 
 
-def test_demo_writes_video_and_summary(tmp_path):
+def test_demo_runs_the_quick_protocol_and_writes_reports(tmp_path):
     from realm_ms.cli import main
 
-    rc = main(["demo", "--tasks", ENV, "--out", str(tmp_path), "--max-steps", "120"])
+    rc = main(["demo", "--tasks", ENV, "--perturbations", "Default", "--out", str(tmp_path), "--max-steps", "120"])
     assert rc == 0
-    summary = json.loads((tmp_path / "summary.json").read_text())[ENV]
-    assert summary["progression"] == 1.0
-    steps = summary["stages_latched_at_step"]
+    (rec,) = [json.loads(line) for line in (tmp_path / "expert" / "records.jsonl").read_text().splitlines()]
+    assert rec["task"] == ENV and rec["success"] and rec["progression"] == 1.0
+    steps = rec["stages"]
     assert steps["REACH"] <= steps["GRASP"] <= steps["LIFT_LARGE"]
-    assert (tmp_path / f"{ENV}.mp4").stat().st_size > 10_000
-    assert ENV in (tmp_path / "summary.md").read_text()
+    assert Path(rec["video"]).stat().st_size > 10_000
+    assert json.loads((tmp_path / "expert" / "metrics.json").read_text())["overall"]["success_rate"] == 1.0
+    assert (tmp_path / "lerobot_tiny" / "records.jsonl").read_text().count("\n") == 1
+    index = (tmp_path / "index.html").read_text()
+    assert "expert/report.html" in index and "lerobot_tiny/report.html" in index
 
 
 def test_robot_model_payload_sags_as_the_impedance_law_predicts(tmp_path):

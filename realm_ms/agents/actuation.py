@@ -110,17 +110,12 @@ class ActuationModel(ActuationStage):
         return tau
 
     def plant_torque(self, state):
-        total = None
-        for s in self.stages:
-            t = s.plant_torque(state)
-            if t is not None:
-                total = t if total is None else total + t
-        return total
+        return self._sum_over_stages("plant_torque", state)
 
     def plant_inertia(self, state):
-        total = None
-        for s in self.stages:
-            t = s.plant_inertia(state)
-            if t is not None:
-                total = t if total is None else total + t
-        return total
+        return self._sum_over_stages("plant_inertia", state)
+
+    def _sum_over_stages(self, term: str, state):
+        """The stages' ``term`` added up; None when no stage contributes."""
+        parts = [t for t in (getattr(s, term)(state) for s in self.stages) if t is not None]
+        return sum(parts[1:], parts[0]) if parts else None

@@ -305,6 +305,11 @@ _EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
 _EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
 
 
+def _suffix_sum(x: np.ndarray) -> np.ndarray:
+    """Sum over links i..n-1 (axis 1): what link i carries of the links after it."""
+    return np.flip(np.cumsum(np.flip(x, 1), 1), 1)
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b over the last axis (Levi-Civita einsum: ~3x faster than np.cross on (B, 7, 3) arrays)."""
     return np.einsum("ijk,...j,...k->...i", _EPS, a, b)
@@ -340,8 +345,26 @@ class NumpyArmModel:
 
     def rnea(self, frames: np.ndarray, qd: np.ndarray, gravity: bool = True) -> np.ndarray:
         """C(q, qd) qd (+ g(q)): ``ArmModel.rnea`` with zero acceleration."""
+        return self._bias(*self._world(frames), qd, gravity)
+
+    def mass_matrix(self, frames: np.ndarray) -> np.ndarray:
+        return self._mass(*self._world(frames))
+
+    def bias_and_mass(self, frames: np.ndarray, qd: np.ndarray, gravity: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(C(q, qd) qd [+ g(q)], M(q)) sharing the per-link world quantities of both."""
+        world = self._world(frames)
+        return self._bias(*world, qd, gravity), self._mass(*world)
+
+    def _world(self, frames: np.ndarray):
+        """Per-link world quantities: joint origins p, axes z, centres of mass c, inertias."""
         rot, p = frames[..., :3, :3], frames[..., :3, 3]
         z = (rot @ self.axes[..., None])[..., 0]
+        c = (frames @ self._com_h)[..., :3, 0]
+        inertia_w = rot @ self.inertias @ rot.transpose(0, 1, 3, 2)
+        return p, z, c, inertia_w
+
+    def _bias(self, p, z, c, inertia_w, qd: np.ndarray, gravity: bool) -> np.ndarray:
+        """Recursive Newton-Euler with zero joint acceleration."""
         w_rel = z * qd[..., None]
         w = np.cumsum(w_rel, axis=1)
         dw = np.cumsum(_cross(w - w_rel, w_rel), axis=1)
@@ -350,65 +373,20 @@ class NumpyArmModel:
         trans = _cross(dw[:, :-1], d) + _cross(wp, _cross(wp, d))
         a0 = np.broadcast_to(-self.gravity if gravity else np.zeros(3), (qd.shape[0], 1, 3))
         a = np.cumsum(np.concatenate([a0, trans], axis=1), axis=1)
-        c = (frames @ self._com_h)[..., :3, 0]
         r = c - p
-        ac = a + _cross(dw, r) + _cross(w, _cross(w, r))
-        f = self.masses[:, None] * ac
-        inertia_w = rot @ self.inertias @ rot.transpose(0, 1, 3, 2)
-        iw = (inertia_w @ w[..., None])[..., 0]
-        idw = (inertia_w @ dw[..., None])[..., 0]
-        nn = idw + _cross(w, iw)
-        rev = lambda x: np.flip(np.cumsum(np.flip(x, 1), 1), 1)  # noqa: E731
-        moment = rev(nn + _cross(c, f)) - _cross(p, rev(f))
-        return (z * moment).sum(-1)
-
-    def bias_and_mass(self, frames: np.ndarray, qd: np.ndarray, gravity: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """(C(q, qd) qd [+ g(q)], M(q)) sharing the per-link world quantities of both."""
-        rot, p = frames[..., :3, :3], frames[..., :3, 3]
-        z = (rot @ self.axes[..., None])[..., 0]
-        c = (frames @ self._com_h)[..., :3, 0]
-        inertia_w = rot @ self.inertias @ rot.transpose(0, 1, 3, 2)
-        rev = lambda x: np.flip(np.cumsum(np.flip(x, 1), 1), 1)  # noqa: E731
-        m = self.masses
-        # RNEA, zero acceleration
-        w_rel = z * qd[..., None]
-        w = np.cumsum(w_rel, axis=1)
-        dw = np.cumsum(_cross(w - w_rel, w_rel), axis=1)
-        d = np.diff(p, axis=1)
-        wp = w[:, :-1]
-        trans = _cross(dw[:, :-1], d) + _cross(wp, _cross(wp, d))
-        a = np.cumsum(np.concatenate([np.broadcast_to(-self.gravity if gravity else np.zeros(3), (qd.shape[0], 1, 3)),
-                                      trans], axis=1), axis=1)
-        r = c - p
-        f = m[:, None] * (a + _cross(dw, r) + _cross(w, _cross(w, r)))
+        f = self.masses[:, None] * (a + _cross(dw, r) + _cross(w, _cross(w, r)))
         iw_dw = inertia_w @ np.stack([w, dw], axis=-1)
         nn = iw_dw[..., 1] + _cross(w, iw_dw[..., 0])
-        bias = (z * (rev(nn + _cross(c, f)) - _cross(p, rev(f)))).sum(-1)
-        # CRBA
+        return (z * (_suffix_sum(nn + _cross(c, f)) - _cross(p, _suffix_sum(f)))).sum(-1)
+
+    def _mass(self, p, z, c, inertia_w) -> np.ndarray:
+        """Composite rigid bodies: M(q), symmetric."""
+        m = self.masses
         cc = (c * c).sum(-1)[..., None, None] * self._eye3 - c[..., :, None] * c[..., None, :]
-        i_o = rev(inertia_w + m[:, None, None] * cc)
-        h = rev(m[:, None] * c)
+        i_o = _suffix_sum(inertia_w + m[:, None, None] * cc)
+        h = _suffix_sum(m[:, None] * c)
         v = _cross(p, z)
         ang = (i_o @ z[..., None])[..., 0] + _cross(h, v)
         lin = self._m_suf[:, None] * v + _cross(z, h)
         g = z @ ang.transpose(0, 2, 1) + v @ lin.transpose(0, 2, 1)
-        upper = np.triu(g)
-        return bias, upper + np.triu(g, 1).transpose(0, 2, 1)
-
-    def mass_matrix(self, frames: np.ndarray) -> np.ndarray:
-        rot, p = frames[..., :3, :3], frames[..., :3, 3]
-        z = (rot @ self.axes[..., None])[..., 0]
-        c = (frames @ self._com_h)[..., :3, 0]
-        m = self.masses
-        inertia_w = rot @ self.inertias @ rot.transpose(0, 1, 3, 2)
-        cc = (c * c).sum(-1)[..., None, None] * self._eye3 - c[..., :, None] * c[..., None, :]
-        rev = lambda x: np.flip(np.cumsum(np.flip(x, 1), 1), 1)  # noqa: E731
-        i_o = rev(inertia_w + m[:, None, None] * cc)
-        h = rev(m[:, None] * c)
-        m_suf = rev(np.broadcast_to(m, (frames.shape[0], self.dof)))[..., None]
-        v = _cross(p, z)
-        ang = (i_o @ z[..., None])[..., 0] + _cross(h, v)
-        lin = m_suf * v + _cross(z, h)
-        g = z @ ang.transpose(0, 2, 1) + v @ lin.transpose(0, 2, 1)
-        upper = np.triu(g)
-        return upper + np.triu(g, 1).transpose(0, 2, 1)
+        return np.triu(g) + np.triu(g, 1).transpose(0, 2, 1)

@@ -75,6 +75,9 @@ def make_cpu_scene(timestep: float = 1 / 100, ground: bool = True):
     from mani_skill.envs.scene import ManiSkillScene
     from mani_skill.envs.utils.system.backend import parse_sim_and_render_backend
 
+    # SAPIEN's body defaults are process-global and every ManiSkill env sets its own (REALM envs: no
+    # sleeping): restore SAPIEN's defaults so this scene behaves the same whatever ran before
+    sapien.physx.set_body_config(solver_position_iterations=10, solver_velocity_iterations=1, sleep_threshold=0.005)
     sub = sapien.Scene([sapien.physx.PhysxCpuSystem()])
     scene = ManiSkillScene([sub], backend=parse_sim_and_render_backend("physx_cpu", "none"), device="cpu")
     scene.px.timestep = timestep

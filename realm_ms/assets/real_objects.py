@@ -95,9 +95,12 @@ def _fitted(obj: RealObject, ref: ObjectSpec, root: Path) -> ObjectSpec:
     from asset_pipeline.export import AtomicDir, read_convex_obj, write_convex_obj, write_glb
     from asset_pipeline.process import process_item
     from asset_pipeline.record import CatalogRecord
+    from asset_pipeline.stages.decompose import CoacdSettings
 
     item = _source_item(obj)
-    out = process_item(item, root / "raw", BuildConfig(thumbnails=False))  # CoACD once, cached by content hash
+    # CoACD once, cached by content hash; a generous budget so that which mesh a task gets never
+    # depends on how busy the machine is (the budget is not part of the cache key)
+    out = process_item(item, root / "raw", BuildConfig(thumbnails=False, coacd=CoacdSettings(budget_s=1800.0)))
     if out.status == "failed" or out.record is None:
         raise RuntimeError(out.error or "asset pipeline failed")
     raw = CatalogRecord.from_dict(out.record)
