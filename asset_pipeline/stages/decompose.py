@@ -1,6 +1,6 @@
 """Convex decomposition: CoACD under a wall-clock budget, with a convex-hull fallback.
 
-CoACD runs in a forked child process so a slow or crashing decomposition can be killed at the
+CoACD runs in a child process (forkserver) so a slow or crashing decomposition can be killed at the
 budget without losing the worker. Results are cached by (geometry, settings) hash, so re-running a
 build after metadata-only changes never repeats a decomposition.
 """
@@ -104,7 +104,9 @@ def decompose(mesh: trimesh.Trimesh, settings: CoacdSettings, cache_dir: Path | 
     out = Path(cache_file) if cache_file is not None else Path(f"/tmp/coacd-{mesh_key(mesh)}-{settings.key()}.obj")
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(f".tmp{mp.current_process().pid}.obj")
-    ctx = mp.get_context("fork")
+    # forkserver, not fork: a process that has started OpenMP/torch thread pools (any env, any
+    # policy) deadlocks a plainly forked child inside CoACD, which then looks like a budget timeout
+    ctx = mp.get_context("forkserver")
     p = ctx.Process(target=_child, args=(np.asarray(src.vertices, np.float64), np.asarray(src.faces, np.int32), settings, str(tmp)))
     p.start()
     p.join(settings.budget_s)
