@@ -37,7 +37,7 @@ LAYERS = [
     {"realm_ms.lerobot", "lerobot_env_realm"},
 ]
 ENTRY_POINTS = {"realm_ms", "realm_ms.cli", "realm_ms.demo", "realm_ms.render_cli", "realm_ms.__main__"}
-# same-layer edges that are allowed (sysid replays the benchmark's own robot, never its tasks)
+# same-layer edges that are NOT allowed (sysid replays the benchmark's own robot, never its tasks)
 FORBIDDEN_SAME_LAYER = {("realm_ms.sysid", "realm_ms.tasks"), ("realm_ms.tasks", "realm_ms.sysid"),
                         ("realm_ms.agents", "realm_ms.assets"), ("realm_ms.assets", "realm_ms.agents")}
 

@@ -260,9 +260,11 @@ class RealmEnv(BaseEnv):
         PhysX keeps a pair's cached contact/friction patches while its shapes stay close, so an
         object teleported onto the table where such a pair survived settles differently from the
         same object in a fresh env (seen: 1e-2 rad of arm drift and success one step later after a
-        grasp episode). Moving every body apart and stepping once ends every pair, so an episode
-        depends only on its seed. CPU sim, whole-batch resets (a GPU step would advance the other
-        sub-envs of a partial reset); skipped when nothing has been simulated since the scene was built.
+        grasp episode). Moving every body apart and stepping once ends every pair. It narrows, but
+        does not close, the gap (pair order still differs), so the default rebuilds the scene
+        instead (``RealmEnvConfig.isolate_episodes``) and this runs only for teleporting resets.
+        CPU sim, whole-batch resets (a GPU step would advance the other sub-envs of a partial
+        reset); skipped when nothing has been simulated since the scene was built.
         """
         if not self._contacts_dirty or self.gpu_sim_enabled or len(env_idx) != self.num_envs:
             return
