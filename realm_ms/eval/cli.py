@@ -30,7 +30,9 @@ def add_parser(sub) -> None:
     from realm_ms.validate import integer
 
     p.add_argument("--workers", type=integer(1), default=None, help="parallel env processes, >= 1 (default: CPU cores, at most 16)")
-    p.add_argument("--backend", choices=("auto", "cpu", "gpu"), default="auto", help="gpu = ManiSkill GPU simulation (needs SAPIEN GPU PhysX)")
+    p.add_argument("--backend", choices=("auto", "cpu", "gpu", "batched"), default="auto",
+                   help="cpu = --workers processes; gpu = ManiSkill GPU simulation, one env of --workers sub-envs (needs SAPIEN GPU PhysX); "
+                        "batched = the GPU runner, on CPU physics where GPU PhysX is missing; auto = gpu where it works, else cpu")
     p.add_argument("--ray-address", default=None, help="shard cells over Ray: 'local', 'auto' or ray://HOST:PORT")
     p.add_argument("--camera-size", default=None, help="WxH of the observed camera frames (default 320x180)")
     p.add_argument("--videos", choices=("none", "failures", "all"), default="none", help="exterior + wrist mp4 per episode")

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from realm_ms.eval.policies.policy import ObsRequest, PolicyInput
+from realm_ms.eval.policies.policy import ObsRequest
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
 
 VIDEO_CAMERAS = ("exterior_1", "wrist")
@@ -273,9 +273,10 @@ class Progress:
 def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: bool = True, replan_every: int = 8) -> Progress:
     """Run ``keys`` on ``backend`` with ``policy``; ``on_record(record)`` is called per finished episode.
 
-    One round: every free slot starts the next key (preferring its current (task, perturbation),
-    so envs are reused), the policy acts once on the batch of slots that need actions, and every
-    active slot executes its chunk. Errors of the policy for one row fail that episode only."""
+    One round: free slots start the next keys (``backend.assign``: preferring a slot's current
+    (task, perturbation), so envs are reused), the policy acts once on the batch of slots that need
+    actions (``backend.policy_input``), and every active slot executes its chunk. Errors of the
+    policy for one row fail that episode only."""
     from tqdm import tqdm
 
     queue = list(keys)
@@ -301,13 +302,7 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
 
     try:
         while queue or active:
-            starts = {}
-            for slot in range(backend.n_slots):
-                if slot in active or not queue:
-                    continue
-                cell = backend.cell(slot)
-                j = next((i for i, k in enumerate(queue) if k.cell() == cell), 0)
-                starts[slot] = queue.pop(j)
+            starts = backend.assign([s for s in range(backend.n_slots) if s not in active], queue) if queue else {}
             if starts:
                 for slot, obs in backend.start(starts).items():
                     if "failed_record" in obs:  # the worker could not even reset: that episode fails
@@ -323,13 +318,7 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
             if policy.env_side or not ready:
                 commands = {s: None for s in active}
             else:
-                batch = PolicyInput(
-                    state=np.stack([pending[s]["state"] for s in ready]),
-                    instructions=[pending[s]["instruction"] for s in ready],
-                    images={c: np.stack([pending[s]["images"][c] for s in ready]) for c in pending[ready[0]]["images"]},
-                    slots=ready,
-                )
-                out = policy.act(batch)
+                out = policy.act(backend.policy_input(ready, pending))
                 for i, s in enumerate(ready):
                     if out.errors and out.errors[i]:
                         aborts[s] = out.errors[i]

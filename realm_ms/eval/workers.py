@@ -6,14 +6,15 @@
   shared-memory block per worker (only a small control message goes through the pipe), the policy is
   batched once per round in the main process. A worker that dies fails its episode and is replaced;
   a worker whose parent dies exits.
-- ManiSkill GPU simulation (``sim_backend="physx_cuda"``, batched envs) needs SAPIEN's GPU PhysX:
-  ``gpu_physx_status()`` says whether it exists here; ``choose_backend`` refuses ``gpu`` with a clear
-  message when it does not.
+- ``BatchedBackend`` (``batched.py``): each sub-env of a ManiSkill env with ``num_envs = N`` is a
+  slot; ManiSkill GPU simulation (``sim_backend="physx_cuda"``) where SAPIEN's GPU PhysX works
+  (``gpu_physx_status()``), the same code on CPU physics with one sub-env per env otherwise.
 - ``run_ray`` shards (task, perturbation) cells over a Ray cluster (``--ray-address``).
 
-All backends share one protocol: ``n_slots``, ``cell(slot)``, ``start({slot: key}) -> {slot: obs}``,
+All backends share one protocol (``Backend``): ``n_slots``, ``cell(slot)``, ``assign(free, queue)
+-> {slot: key}``, ``start({slot: key}) -> {slot: obs}``, ``policy_input(ready, pending)``,
 ``step({slot: actions | None}) -> {slot: (obs, record)}``, ``abort({slot: msg}) -> {slot: record}``,
-``close()``.
+``close()``. ``choose_backend`` maps ``--backend`` onto them through ``BACKENDS``.
 """
 
 from __future__ import annotations
@@ -25,11 +26,44 @@ from multiprocessing import shared_memory
 
 import numpy as np
 
+from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import EpisodeKey
 from realm_ms.eval.runner import EpisodeRunner, RunConfig
 
 
-class InlineBackend:
+class Backend:
+    """What ``run_plan`` drives; subclasses hold the slots' envs (protocol: module docstring)."""
+
+    n_slots: int
+
+    def cell(self, slot: int):
+        raise NotImplementedError
+
+    def assign(self, free: list[int], queue: list[EpisodeKey]) -> dict[int, EpisodeKey]:
+        """Pop the next key from ``queue`` for each free slot, preferring the slot's current
+        (task, perturbation) cell so its env is reused."""
+        starts = {}
+        for slot in free:
+            if not queue:
+                break
+            cell = self.cell(slot)
+            starts[slot] = queue.pop(next((i for i, k in enumerate(queue) if k.cell() == cell), 0))
+        return starts
+
+    def policy_input(self, ready: list[int], pending: dict[int, dict]) -> PolicyInput:
+        """The policy's batch from the latest observation of each ``ready`` slot."""
+        return PolicyInput(
+            state=np.stack([pending[s]["state"] for s in ready]),
+            instructions=[pending[s]["instruction"] for s in ready],
+            images={c: np.stack([pending[s]["images"][c] for s in ready]) for c in pending[ready[0]]["images"]},
+            slots=list(ready),
+        )
+
+    def close(self) -> None:
+        pass
+
+
+class InlineBackend(Backend):
     def __init__(self, cfg: RunConfig, n_slots: int = 1):
         self.runners = [EpisodeRunner(cfg) for _ in range(n_slots)]
         self.n_slots = n_slots
@@ -127,7 +161,7 @@ def _worker_main(conn, cfg: RunConfig, parent_pid: int) -> None:
             shm.unlink()
 
 
-class ProcessBackend:
+class ProcessBackend(Backend):
     """N worker processes (spawned: SAPIEN and torch are not fork-safe)."""
 
     def __init__(self, cfg: RunConfig, n_workers: int):
@@ -261,7 +295,11 @@ def _crash_record(key: EpisodeKey | None, cfg: RunConfig, msg: str, tb: str | No
 
 # ---------------------------------------------------------------------------------------- GPU / choice
 def gpu_physx_status() -> tuple[bool, str]:
-    """(available, reason): SAPIEN GPU PhysX needs a CUDA device and SAPIEN's CUDA PhysX build."""
+    """(available, reason): SAPIEN GPU PhysX needs a CUDA device and SAPIEN's CUDA PhysX library
+    (fetched by SAPIEN on first use; the fetch is bounded so an offline machine answers quickly)."""
+    import socket
+
+    old = socket.getdefaulttimeout()
     try:
         import torch
 
@@ -269,26 +307,51 @@ def gpu_physx_status() -> tuple[bool, str]:
             return False, "no CUDA device is visible (torch.cuda.is_available() is False)"
         import sapien
 
+        socket.setdefaulttimeout(30)
         sapien.physx.PhysxGpuSystem()
         return True, "SAPIEN GPU PhysX available"
-    except Exception as e:  # noqa: BLE001  (SAPIEN raises plain RuntimeError/ImportError variants)
+    except Exception as e:  # noqa: BLE001  (SAPIEN raises plain RuntimeError/ImportError/download errors)
         return False, f"SAPIEN GPU PhysX unavailable: {type(e).__name__}: {e}"
+    finally:
+        socket.setdefaulttimeout(old)
+
+
+def _cpu_backend(cfg: RunConfig, workers: int, gpu: bool):
+    return InlineBackend(cfg, 1) if workers <= 1 else ProcessBackend(cfg, workers)
+
+
+def _gpu_backend(cfg: RunConfig, workers: int, gpu: bool):
+    from realm_ms.eval.batched import BatchedBackend
+
+    return BatchedBackend(cfg, num_envs=workers, groups=1, sim_backend="physx_cuda")
+
+
+def _batched_backend(cfg: RunConfig, workers: int, gpu: bool):
+    """GPU simulation where it works; else the same runner on CPU physics, one sub-env per env."""
+    from realm_ms.eval.batched import BatchedBackend
+
+    if gpu:
+        return _gpu_backend(cfg, workers, gpu)
+    return BatchedBackend(cfg, num_envs=1, groups=workers, sim_backend="physx_cpu")
+
+
+# --backend NAME -> factory(cfg, workers, gpu_physx_available); ``auto`` resolves to gpu or cpu
+BACKENDS = {"cpu": _cpu_backend, "gpu": _gpu_backend, "batched": _batched_backend}
 
 
 def choose_backend(kind: str, cfg: RunConfig, workers: int):
-    """``auto``: GPU simulation where SAPIEN's GPU PhysX exists, else CPU worker processes; ``cpu``:
-    worker processes (``workers`` <= 1 runs in-process); ``gpu``: GPU simulation or a clear error."""
-    if kind in ("gpu", "auto"):
-        ok, why = gpu_physx_status()
-        if kind == "gpu" and not ok:
-            raise RuntimeError(f"--backend gpu: {why}; use --backend cpu (N worker processes) instead")
-        if kind == "gpu" or (ok and kind == "auto" and os.environ.get("REALM_EVAL_GPU_SIM") == "1"):
-            # The batched physx_cuda path steps all slots of a (task, perturbation) cell in one env;
-            # it cannot be exercised without an NVIDIA GPU, so auto keeps CPU workers unless opted in.
-            raise RuntimeError("GPU-batched evaluation is not available in this build; use --backend cpu")
-    if workers <= 1:
-        return InlineBackend(cfg, 1)
-    return ProcessBackend(cfg, workers)
+    """``auto``: GPU simulation where SAPIEN's GPU PhysX works, else CPU worker processes; ``cpu``:
+    worker processes (``workers`` <= 1 runs in-process); ``gpu``: one batched GPU env of ``workers``
+    sub-envs, or a clear error; ``batched``: the batched runner on GPU physics where it works, else on
+    CPU physics with ``workers`` single-sub-env envs in this process (the path the tests run)."""
+    gpu, why = gpu_physx_status() if kind in ("auto", "gpu", "batched") else (False, "")
+    if kind == "auto":
+        kind = "gpu" if gpu else "cpu"
+    if kind == "gpu" and not gpu:
+        raise RuntimeError(f"--backend gpu: {why}; use --backend cpu (N worker processes) instead")
+    if kind not in BACKENDS:
+        raise RuntimeError(f"unknown backend {kind!r}; known: auto, {', '.join(BACKENDS)}")
+    return BACKENDS[kind](cfg, workers, gpu)
 
 
 # ---------------------------------------------------------------------------------------- Ray
