@@ -19,7 +19,6 @@ import torch
 
 CONTROL_HZ = 15.0
 OPEN, CLOSED = 0.0, 1.0
-MIN_GRASP_Z = 0.012  # m, lowest TCP height above the table (pads end 4 mm below the TCP)
 DEFAULT_YAW = -math.pi / 4  # closing direction with joint 7 at 0
 
 
@@ -159,10 +158,34 @@ def carry(ctx: Ctx, p, yaw: float | None = None, speed: float = 0.15):
 
 
 # -------------------------------------------------------------------- object geometry helpers
-def grasp_height(top: float, centre: float) -> float:
-    """TCP height for a top-down grasp: at the object's centre, but not so low that the gripper
-    base hits the top (fingers reach ~5 cm) nor that the pads dig into the table."""
-    return max(min(centre, top - 0.035), MIN_GRASP_Z)
+FLAT = 0.02  # m: objects lower than this are pinched with the pads skimming the table
+PAD_FLOOR = 0.0  # m: pad bottoms on the table when pinching a flat object (closing lifts the hand ~1 mm)
+PAD_CLEARANCE = 0.003  # m between the pad bottoms and the table when the pads touch a taller object
+PAD_BELOW_TCP_OPEN = 0.0044  # m, pad bottoms under the TCP with the gripper open (measured on the sim)
+
+
+def pad_below_tcp(width: float) -> float:
+    """How far the pad bottoms hang below the TCP when the pad faces are ``width`` apart.
+
+    The 2F-85's pads ride a parallelogram: closing swings them inwards AND down (14 mm over the
+    stroke), so a TCP height chosen with the gripper open puts the pads into the table once they
+    reach a narrow object. Exact for the linkage of ``realm_ms.agents.robotiq_2f85``."""
+    from realm_ms.agents import robotiq_2f85 as g
+
+    s = (width / 2 - g._DRIVER_PIVOT_Y - g._PAD_FACE_Y_IN_FOLLOWER) / g._CRANK  # sin(phi0 - theta)
+    c = math.sqrt(max(1.0 - min(max(s, -1.0), 1.0) ** 2, 0.0))
+    return PAD_BELOW_TCP_OPEN + g._CRANK * (c - math.cos(g._PHI0))
+
+
+def grasp_height(base: float, top: float, width: float) -> float:
+    """TCP height for a top-down grasp of an object standing on ``base`` with its top at ``top``,
+    ``width`` across the pads: at the object's centre, but not so low that the gripper base hits
+    the top (fingers reach ~5 cm) nor that the pads, at contact, dig into the table. Flat objects
+    (spoon bowl, coin) are pinched with the pads just above the table at contact."""
+    below = pad_below_tcp(width)
+    if top - base < FLAT:
+        return base + PAD_FLOOR + below
+    return max(min((base + top) / 2, top - 0.035), base + PAD_CLEARANCE + below)
 
 
 def grasp_yaw_for(extents, r: np.ndarray, ref: float = DEFAULT_YAW) -> float:
@@ -174,48 +197,75 @@ def grasp_yaw_for(extents, r: np.ndarray, ref: float = DEFAULT_YAW) -> float:
     return nearest_yaw([th + math.pi / 2] if ex > ey else [th], ref)
 
 
+def width_across(extents, r: np.ndarray, yaw: float) -> float:
+    """The object's bounding-box extent along the closing direction ``yaw`` (pads' travel)."""
+    d = abs(wrap(yaw - obj_yaw(r)))
+    along_x = min(d, math.pi - d) < math.pi / 4
+    return float(extents[0] if along_x else extents[1])
+
+
+def object_geometry(ctx: "Ctx", obj) -> tuple:
+    """(catalog spec, per-axis scale, extents) of ``obj`` in this env: perturbations give each
+    sub-env its own model and size (SB-NOUN, VB-MOBJ)."""
+    assets = getattr(obj, "assets", None) or [obj.asset]
+    k = ctx.i if len(assets) > 1 else 0
+    asset = assets[k]
+    ext_all = getattr(obj, "_extents", None)
+    ext = np.asarray(obj.extents if ext_all is None else ext_all[k if ext_all.shape[0] > 1 else 0].cpu().numpy(), float)
+    scale = ext / np.maximum(np.asarray(asset.extents, float), 1e-9)
+    return asset, scale, ext
+
+
+def scaled_vertices(asset, scale) -> np.ndarray | None:
+    """The collision mesh's vertices in the object frame, at the object's scale (None: no mesh)."""
+    try:
+        import trimesh
+
+        v = np.asarray(trimesh.load(str(asset.collision_path), force="mesh").vertices, float)
+    except Exception:
+        return None
+    return v * np.asarray(scale, float)
+
+
+@dataclass(frozen=True)
+class GraspSlice:
+    point: np.ndarray  # (x, y, z_top) in the object frame
+    top: float  # slice top above the object's origin (m)
+    width: float | None  # extent across the pads at the slice (None: the bounding box's)
+
+
 _PROFILE_CACHE: dict = {}
 
 
-def grasp_point_local(obj) -> tuple[np.ndarray, float]:
-    """Where to grasp a rigid object, in its frame: (x, y, z_top) of the best slice and the slice height.
+def grasp_slice(asset, scale, ext) -> GraspSlice:
+    """Where to grasp a rigid object, in its (scaled) frame.
 
-    Elongated objects are sliced along their long local axis; the expert grasps the tallest slice
-    that fits in the gripper (a spoon by its bowl, not by its 3 mm handle). Compact objects: the
+    Elongated objects are sliced along their long local axis; the expert grasps the middle of the
+    tallest run of slices that fit in the gripper (a spoon in the middle of its bowl, not by its 3 mm
+    handle nor at the bowl's tapering tip; a marker or banana mid-length). Compact objects: the
     bounding-box centre."""
-    key = obj.asset.id
+    ext = np.asarray(ext, float)
+    key = (asset.id, tuple(np.round(ext, 5)))
     if key in _PROFILE_CACHE:
         return _PROFILE_CACHE[key]
-    ext = np.asarray(obj.extents, float)
-    out = (np.array([0.0, 0.0, ext[2]]), float(ext[2]))
-    if max(ext[0], ext[1]) > 1.8 * min(ext[0], ext[1]):
-        try:
-            import trimesh
-
-            m = trimesh.load(str(obj.asset.collision_path), force="mesh")
-            v = np.asarray(m.vertices)
-            ax = 0 if ext[0] >= ext[1] else 1
-            lo, hi = v[:, ax].min(), v[:, ax].max()
-            best = None
-            for c in np.linspace(lo + 0.02, hi - 0.02, 15):
-                sel = np.abs(v[:, ax] - c) < 0.012
-                if sel.sum() < 3:
-                    continue
-                width = np.ptp(v[sel, 1 - ax])
-                h = v[sel, 2].max()
-                if width < 0.075 and (best is None or h > best[0] + 1e-3):
-                    mid = (v[sel, 1 - ax].max() + v[sel, 1 - ax].min()) / 2
-                    pt = np.zeros(3)
-                    pt[ax], pt[1 - ax], pt[2] = c, mid, h
-                    best = (h, pt)
-            if best is not None:
-                # prefer the centre when it is (nearly) as tall: a marker or banana is grasped mid-length
-                sel = np.abs(v[:, ax]) < 0.012
-                if sel.sum() >= 3 and v[sel, 2].max() > best[0] - 0.003:
-                    best = (v[sel, 2].max(), np.array([0.0, 0.0, v[sel, 2].max()]))
-                out = (best[1], float(best[0]))
-        except Exception:  # no mesh: bounding box centre
-            pass
+    out = GraspSlice(np.array([0.0, 0.0, ext[2]]), float(ext[2]), None)
+    v = scaled_vertices(asset, scale) if max(ext[0], ext[1]) > 1.8 * min(ext[0], ext[1]) else None
+    if v is not None:
+        ax = 0 if ext[0] >= ext[1] else 1
+        lo, hi = v[:, ax].min(), v[:, ax].max()
+        slices = []
+        for c in np.linspace(lo + 0.02, hi - 0.02, 15):
+            sel = np.abs(v[:, ax] - c) < 0.012
+            if sel.sum() >= 3 and np.ptp(v[sel, 1 - ax]) < 0.075:
+                slices.append((c, v[sel, 2].max(), (v[sel, 1 - ax].max() + v[sel, 1 - ax].min()) / 2, np.ptp(v[sel, 1 - ax])))
+        if slices:
+            h_max = max(s[1] for s in slices)
+            tall = [s for s in slices if s[1] > h_max - 0.003]
+            mid = float(np.mean([s[0] for s in tall]))
+            c, h, m, w = min(tall, key=lambda s: abs(s[0] - mid))
+            pt = np.zeros(3)
+            pt[ax], pt[1 - ax], pt[2] = c, m, h
+            out = GraspSlice(pt, float(h), float(w))
     _PROFILE_CACHE[key] = out
     return out
 
@@ -223,22 +273,25 @@ def grasp_point_local(obj) -> tuple[np.ndarray, float]:
 def grasp(ctx: Ctx, obj, tries: int = 3, clearance: float = 0.10, point=None, yaw=None):
     """Approach, descend, close on a rigid task object; re-tries from above when the grasp fails.
     Returns True on a real two-pad grasp."""
-    for attempt in range(tries):
+    asset, scale, ext = object_geometry(ctx, obj)
+
+    def target() -> tuple[np.ndarray, float, bool]:
         pos, r = ctx.obj_pose(obj)
-        ext = obj.extents
-        if point is not None:
-            g = np.asarray(point(ctx), float)
-        else:
-            local, h = grasp_point_local(obj)
-            w = pos + r @ np.array([local[0], local[1], 0.0])
-            if h < 0.02:  # flat (spoon, ticket): pads skim the table
-                z = pos[2] + max(h / 2, 0.004)
-            else:
-                z = grasp_height(pos[2] + h, pos[2] + min(h, float(ext[2])) / 2)
-            g = np.array([w[0], w[1], z])
         y = yaw(ctx) if yaw is not None else grasp_yaw_for(ext, r)
+        if point is not None:
+            return np.asarray(point(ctx), float), y, False
+        sl = grasp_slice(asset, scale, ext)
+        w = pos + r @ np.array([sl.point[0], sl.point[1], 0.0])
+        width = sl.width if sl.width is not None else width_across(ext, r, y)
+        return np.array([w[0], w[1], grasp_height(pos[2], pos[2] + sl.top, width)]), y, sl.top < FLAT
+
+    for attempt in range(tries):
+        g, y, _ = target()
         yield from approach(ctx, g, y, clearance=clearance)
-        yield from descend(ctx, g)
+        # re-read: the object has settled (spawned 2 mm up) or been nudged since the approach began
+        g, _, flat = target()
+        # a flat object leaves no margin: the TCP must really be at the pinch height before closing
+        yield from descend(ctx, g, tol=0.003 if flat else 0.008)
         yield from close(ctx, obj.entity)
         if ctx.grasped(obj.entity):
             return True

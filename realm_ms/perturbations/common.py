@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -83,6 +84,20 @@ def sample_ids(rng: np.random.Generator, n: int, **filters) -> list[str]:
     from realm_ms.assets import sample_objects
 
     return [o.id for o in sample_objects(n, rng, **filters)]
+
+
+@lru_cache(maxsize=None)
+def catalog_extents(categories: tuple[str, ...], max_extent: float) -> tuple[tuple[str, tuple[float, float, float], tuple[float, float, float]], ...]:
+    """Every catalog object of ``categories`` (the built catalog, else the procedural one) as
+    ``(id, scale, extents)`` once shrunk to ``max_extent`` (``cap_scale``), sorted by id."""
+    from realm_ms.assets import ObjectQuery, load_catalog
+
+    ids = sorted(i for v in load_catalog().candidates(ObjectQuery(categories=tuple(categories))).values() for i in v)
+    out = []
+    for oid in ids:
+        scale = cap_scale(oid, max_extent)
+        out.append((oid, scale, tuple(float(e) for e in object_spec(oid).extents * np.asarray(scale))))
+    return tuple(out)
 
 
 def categories_of(spec: TaskSpec, roles=("main", "target")) -> tuple[str, ...]:

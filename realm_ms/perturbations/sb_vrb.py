@@ -18,8 +18,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
 from realm_ms.perturbations.perturbation import Perturbation
-from realm_ms.perturbations.common import WIDE_REGION, cap_scale, widened, main_noun, sample_ids, set_query, target_noun, with_object
+from realm_ms.perturbations.common import WIDE_REGION, catalog_extents, main_noun, object_spec, set_query, target_noun, widened, with_object
+from realm_ms.tasks.progression import Thresholds
 from realm_ms.tasks.skills import as_skill
 from realm_ms.tasks.task_spec import SceneObject
 
@@ -33,8 +36,38 @@ VERBS = {
     "push": ("push_off",),
 }
 RECEIVER_MAX = 0.185  # m
+INTO_RIM_BAND = 0.02  # m above the rim the PLACE_INTO check still counts as inside
+BOWL_FLOOR = 0.006  # m, bottom thickness of the catalog's bowls
+FIT_MARGIN = 0.005  # m of slack for settling / tilt
 PUT_RECEIVERS = ("bowl",)
 STACK_RECEIVERS = ("box", "cracker_box", "notebook", "toy_block")
+
+
+def receiver_fits(verb: str, main_ext, recv_ext) -> bool:
+    """Whether the main object (extents ``main_ext``) can end the new verb's rubric on a receiver of
+    extents ``recv_ext``: put -> its narrow side goes in (a long spoon may rest across the rim) and,
+    standing inside, its centre is below the rim band the PLACE_INTO check allows (rim + 2 cm: a
+    17 cm bottle needs a deep bowl); stack -> its narrow side fits on the receiver's top (centred,
+    it may overhang) and, stacked, the two centres are within MOVE_CLOSE's distance."""
+    m, r = np.asarray(main_ext, float), np.asarray(recv_ext, float)
+    narrow_in = float(min(m[0], m[1])) <= (0.8 if verb == "put" else 1.0) * float(min(r[0], r[1]))
+    if verb == "put":
+        return narrow_in and m[2] / 2 + BOWL_FLOOR + FIT_MARGIN <= r[2] + INTO_RIM_BAND
+    return narrow_in and (m[2] + r[2]) / 2 + FIT_MARGIN <= Thresholds().move_close_dist
+
+
+def fitting_receiver(rng, verb: str, main_ext) -> tuple[str, tuple[float, float, float]]:
+    """A receiver of the verb's categories (max extent <= ``RECEIVER_MAX``) that fits the main
+    object: a category uniformly among those with a fitting model, then a model uniformly."""
+    cats = PUT_RECEIVERS if verb == "put" else STACK_RECEIVERS
+    by_cat: dict[str, list] = {}
+    for oid, scale, ext in catalog_extents(cats, RECEIVER_MAX):
+        if receiver_fits(verb, main_ext, ext):
+            by_cat.setdefault(object_spec(oid).category, []).append((oid, scale))
+    if not by_cat:
+        raise RuntimeError(f"SB-VRB: no {'/'.join(cats)} in the catalog fits an object of extents {np.round(main_ext, 3).tolist()} m for '{verb}'")
+    pool = by_cat[sorted(by_cat)[int(rng.integers(len(by_cat)))]]
+    return pool[int(rng.integers(len(pool)))]
 
 
 def sentence(verb: str, x: str, y: str | None) -> str:
@@ -60,9 +93,10 @@ class SbVrb(Perturbation):
         verb = verbs[int(shared.integers(len(verbs)))]
         out = dict(verb=verb)
         if verb in ("put", "stack") and not (verb == skill):
-            cats = PUT_RECEIVERS if verb == "put" else STACK_RECEIVERS
-            (oid,) = sample_ids(rng, 1, categories=cats)
-            out.update(receiver=oid, receiver_scale=list(cap_scale(oid, RECEIVER_MAX)))
+            main = ctx.spec.main
+            main_ext = object_spec(main.asset).extents * np.asarray(main.scale, float)
+            oid, scale = fitting_receiver(rng, verb, main_ext)
+            out.update(receiver=oid, receiver_scale=list(scale))
         return out
 
     def edit_spec(self, spec, params, ctx):
@@ -87,8 +121,6 @@ class SbVrb(Perturbation):
             else:
                 objs.append(SceneObject("receiver", params["receiver"], role="target", region=WIDE_REGION, scale=tuple(params["receiver_scale"])))
                 spec = widened(spec)
-            from realm_ms.perturbations.common import object_spec
-
             y = object_spec(params["receiver"]).noun
         elif verb in ("pick", "rotate"):  # the target stays on the table as a distractor
             objs = [replace(o, role="distractor") if o.role == "target" else o for o in objs]

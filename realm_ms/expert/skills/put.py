@@ -3,7 +3,7 @@
 
 import numpy as np
 
-from realm_ms.expert.primitives import carry, grasp, hold, lift, move, release
+from realm_ms.expert.primitives import carry, grasp, hold, lift, move, object_geometry, release
 
 
 def place_on(ctx, obj, target, drop: float = 0.02, align_yaw=None, tries: int = 3):
@@ -15,7 +15,7 @@ def place_on(ctx, obj, target, drop: float = 0.02, align_yaw=None, tries: int = 
             ctx.log.append("place: no grasp")
         yield from lift(ctx, 0.0)
         tpos, tr = ctx.obj_pose(target)
-        top = tpos[2] + float(target.extents[2])
+        top = tpos[2] + float(object_geometry(ctx, target)[2][2])
         opos, _ = ctx.obj_pose(obj)
         hand = ctx.tcp()[2] - opos[2]  # TCP height above the object's bottom while held
         safe = max(top, 0.0) + hand + max(drop, 0.0) + 0.08

@@ -5,18 +5,15 @@ import math
 
 import numpy as np
 
-from realm_ms.expert.primitives import DEFAULT_YAW, grasp, hold, lift, move, obj_yaw, release
+from realm_ms.expert.primitives import DEFAULT_YAW, grasp, hold, lift, move, obj_yaw, object_geometry, release, scaled_vertices
 
 TURN = 1.5  # rad (> 1.1 threshold)
+CUPS = ("mug", "cup", "teacup", "coffee_cup")
 
 
-def _rim_grasp(obj):
-    """Rim point (local) and closing direction for cup-like objects: the wall on the side away
-    from the handle (local -x), closing radially."""
-    import trimesh
-
-    m = trimesh.load(str(obj.asset.collision_path), force="mesh")
-    v = np.asarray(m.vertices)
+def _rim_grasp(v: np.ndarray):
+    """Rim point (local) for cup-like objects, from their (scaled) mesh vertices ``v``: the wall
+    on the side away from the handle (local -x); the pads close radially."""
     top = v[:, 2].max()
     ring = v[v[:, 2] > top - 0.01]
     x_min = ring[:, 0].min()
@@ -26,8 +23,10 @@ def _rim_grasp(obj):
 def rotate(ctx, tries: int = 3):
     obj = ctx.env.main
     point = yaw = None
-    if obj.asset.category in ("mug", "cup", "teacup", "coffee_cup"):
-        local, top = _rim_grasp(obj)
+    asset, scale, _ = object_geometry(ctx, obj)
+    verts = scaled_vertices(asset, scale) if asset.category in CUPS else None
+    if verts is not None:
+        local, top = _rim_grasp(verts)
 
         def point(c):
             pos, r = c.obj_pose(obj)
