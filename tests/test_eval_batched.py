@@ -6,6 +6,7 @@ partial resets and per-slot bookkeeping are checked against a stand-in env with 
 that follows ManiSkill's reset/step contract."""
 
 import json
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -24,19 +25,37 @@ TASKS = ["REALM-PickApple-v1", "REALM-PushSwitch-v1"]
 
 
 def _records(path):
-    recs = [json.loads(line) for line in path.read_text().splitlines()]
-    return {(r["task"], r["perturbation"], r["seed"]): {k: v for k, v in r.items() if k != "wall_s"} for r in recs}
+    """Records by key, without wall time; a video as its file's bytes (the paths differ by run directory)."""
+    out = {}
+    for r in map(json.loads, path.read_text().splitlines()):
+        r.pop("wall_s")
+        if "video" in r:
+            r["video"] = Path(r["video"]).read_bytes()
+        out[r["task"], r["perturbation"], r["seed"]] = r
+    return out
 
 
-@pytest.mark.parametrize("policy,max_steps", [("zero", "20"), ("expert", "100")])
-def test_batched_cpu_records_equal_inline(tmp_path, policy, max_steps):
-    common = ["eval", "--policy", policy, "--tasks", *TASKS, "--perturbations", "Default", "--episodes", "2", "--max-steps", max_steps, "--no-progress"]
+def _inline_and_batched(tmp_path, args):
+    common = ["eval", *args, "--no-progress"]
     assert main([*common, "--backend", "cpu", "--workers", "1", "--out", str(tmp_path / "inline")]) == 0
     assert main([*common, "--backend", "batched", "--workers", "2", "--out", str(tmp_path / "batched")]) == 0
-    inline, batched = _records(tmp_path / "inline" / "records.jsonl"), _records(tmp_path / "batched" / "records.jsonl")
-    assert len(inline) == 4 and inline == batched  # success, progression, stages, steps, quality: all equal
+    return _records(tmp_path / "inline" / "records.jsonl"), _records(tmp_path / "batched" / "records.jsonl")
+
+
+@pytest.mark.parametrize("policy,max_steps,perturbations", [("zero", "20", ["Default", "VB-POSE"]), ("expert", "100", ["Default"])])
+def test_batched_cpu_records_equal_inline(tmp_path, policy, max_steps, perturbations):
+    inline, batched = _inline_and_batched(tmp_path, ["--policy", policy, "--tasks", *TASKS, "--perturbations", *perturbations, "--episodes", "2",
+                                                     "--max-steps", max_steps])
+    # success, progression, stages, steps, quality, drawn perturbation parameters: all equal
+    assert len(inline) == 4 * len(perturbations) and inline == batched
     if policy == "expert":  # the expert succeeds and the episode stops 15 steps after success, before max steps
         assert all(r["success"] and r["stalled_stage"] == "DONE" and r["steps"] < 100 for r in batched.values())
+
+
+def test_batched_cpu_videos_equal_inline(tmp_path):
+    inline, batched = _inline_and_batched(tmp_path, ["--policy", "zero", "--tasks", TASKS[0], "--perturbations", "Default", "--episodes", "1",
+                                                     "--max-steps", "6", "--videos", "all", "--camera-size", "64x36"])
+    assert len(batched) == 1 and all(r["video"] for r in batched.values()) and inline == batched  # the same frames, last step included
 
 
 def test_batched_cpu_hands_the_observation_batch_to_the_policy(tmp_path):
@@ -230,3 +249,36 @@ def test_rows_of_a_finished_slot_hold_and_whole_batch_waves():
     assert torch.equal(last[0], before[0]) and last[1, 7] > before[1, 7]  # the finished row holds, the other got a new chunk
     wave2 = env.actions[-9:]
     assert all(torch.equal(a[2], torch.full((8,), 3.0)) for a in wave2)  # the idle row holds its reset state
+
+
+def test_policy_errors_fail_their_slot_and_unsupported_cells_are_recorded():
+    from realm_ms.eval.policies.policy import PolicyOutput
+
+    cfg = RunConfig(policy="zero", max_steps=8, replan_every=2, success_tail=TAIL, obs=ObsRequest(cameras=("wrist",), width=4, height=2))
+
+    def factory(task, perturbation, run_cfg):
+        if task == "REALM-B":
+            raise NotImplementedError("REALM-B: perturbation not applicable")
+        return StandInEnv(task, perturbation, run_cfg, run_cfg.env_kwargs["num_envs"])
+
+    class FailsOddSeeds(ZeroPolicy):  # a server that cannot serve some rows: those episodes fail, not the run
+        def act(self, batch):
+            out = super().act(batch)
+            return PolicyOutput(out.actions, [("down" if int(t.split()[1]) % 2 else None) for t in batch.instructions])
+
+    keys = plan(["REALM-A", "REALM-B"], ["Default"], 4, seed=10)
+    be = BatchedBackend(cfg, num_envs=3, sim_backend="physx_cuda", env_factory=factory)
+    recs = []
+    try:
+        run_plan(keys, FailsOddSeeds(), be, recs.append, progress_bar=False, replan_every=2)
+    finally:
+        be.close()
+    by = {(r["task"], r["seed"]): r for r in recs}
+    assert len(recs) == 8 and set(by) == {(k.task, k.seed) for k in keys}
+    for s in range(10, 14):
+        a, b = by["REALM-A", s], by["REALM-B", s]
+        assert b["status"] == "unsupported" and "not applicable" in b["error"]
+        if s % 2:
+            assert a["status"] == "error" and a["error"] == "down" and a["steps"] == 0 and a["instruction"] == f"seed {s}"
+        else:
+            assert a["status"] == "ok" and a["steps"] == _goal(s) + TAIL

@@ -299,6 +299,7 @@ class BatchedBackend(Backend):
                     a[r] = torch.as_tensor(np.stack([x[i] for x in host_actions.values()]), device=a.device)
             obs, _, term, trunc, info = env.step(a)
             g.hold = a
+            self._frames(g, obs, [s for s in live if self.episodes[s].record is None])  # the last step's frame included
             flags = torch.stack([info["progression"].float(), info["success"].float(), term.float(), trunc.float().to(term.device),
                                  *[info[k].float() for k in stage_keys]]).cpu().numpy()
             qt = None
@@ -325,7 +326,6 @@ class BatchedBackend(Backend):
                 script_over = g.env_policy is not None and bool(getattr(g.env_policy, "done", [False] * g.num_envs)[r])
                 if flags[2, r] > 0.5 or flags[3, r] > 0.5 or ep.steps >= self.cfg.max_steps or script_over:
                     ep.record = self._record(g, ep, "ok", stalled=u.stalled_stage()[r])
-            self._frames(g, obs, [s for s in live if self.episodes[s].record is None])
             if all(self.episodes[s].record is not None for s in live):
                 break
         running = [s for s in live if self.episodes[s].record is None]
