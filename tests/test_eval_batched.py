@@ -203,7 +203,8 @@ def _run_stand_in(keys, num_envs, max_steps=30, rebuilds_scene=False, replan_eve
             batches.append(batch)
             zero_copy.append(batch.state is be.groups[0].batch.state and batch.images["wrist"] is be.groups[0].batch.images["wrist"])
             out = super().act(batch)
-            out.actions[..., 7] = len(batches) / 100  # which call chose an action: finished rows must hold theirs
+            # which call and chunk step chose an action: a finished row must hold its last one
+            out.actions[..., 7] = len(batches) / 100 + np.arange(out.actions.shape[1]) / 1000
             return out
 
     be = BatchedBackend(cfg, num_envs=num_envs, groups=1, sim_backend="physx_cuda", env_factory=factory)
@@ -244,6 +245,8 @@ def test_rows_of_a_finished_slot_hold_and_whole_batch_waves():
     assert [idx for _, idx in env.resets] == [None, None]  # waves of 3 then 2 episodes, no partial reset
     assert env.resets[1][0] == [3, 4, 3]  # the idle third row reuses a started row's seed
     assert all(r["steps"] == _goal(r["seed"]) + TAIL for r in recs)
+    # wave 1: seed 0 ends at step 5, inside the second 4-step chunk; seeds 1 and 2 run on to steps 6 and 7
+    assert all(torch.equal(env.actions[k][0], env.actions[4][0]) for k in (5, 6)) and not torch.equal(env.actions[5][2], env.actions[4][2])
     # wave 2: seed 3 ends at step 8 (end of a 4-step chunk), seed 4 runs one step more
     last, before = env.actions[-1], env.actions[-2]
     assert torch.equal(last[0], before[0]) and last[1, 7] > before[1, 7]  # the finished row holds, the other got a new chunk

@@ -104,6 +104,7 @@ class Group:
     seeds: list[int] = field(default_factory=list)  # current episode seed per row
     hold: object = None  # (N, 8) last applied action; idle rows keep holding it
     env_policy: object = None
+    obs: object = None  # the env's latest (batched) observation
     batch: ObsBatch | None = None
 
     def slots(self) -> range:
@@ -157,7 +158,7 @@ class BatchedBackend(Backend):
     def _build(self, g: Group, cell: tuple[str, str]) -> None:
         if g.env is not None:
             g.env.close()
-        g.env, g.cell, g.unsupported, g.reset_once, g.env_policy, g.batch = None, cell, None, False, None, None
+        g.env, g.cell, g.unsupported, g.reset_once, g.env_policy, g.obs, g.batch = None, cell, None, False, None, None, None
         g.seeds = [0] * g.num_envs
         try:
             g.env = self.env_factory(cell[0], cell[1], self.cfg)
@@ -196,7 +197,7 @@ class BatchedBackend(Backend):
         else:
             idx = torch.as_tensor(rows, dtype=torch.long, device=g.env.unwrapped.device)
             obs, info = g.env.reset(seed=list(g.seeds), options={"env_idx": idx})
-        g.reset_once = True
+        g.reset_once, g.obs = True, obs
         u = g.env.unwrapped
         if g.hold is None or whole:
             g.hold = u.agent.droid_state().clone()
@@ -284,22 +285,24 @@ class BatchedBackend(Backend):
         n = min([self.cfg.replan_every] + [len(a) for a in chunks.values()])
         host_actions = {s: np.asarray(a[:n], dtype=np.float32) for s, a in chunks.items()}
         stage_keys = [f"stage_{st.lower()}" for st in self.episodes[live[0]].stages]
-        obs = None
+        obs = g.obs
         for i in range(n):
+            running = [s for s in live if self.episodes[s].record is None]  # rows without an episode hold
             if g.env_policy is not None:
                 a = g.env_policy.act(obs)
                 idle = torch.ones(g.num_envs, dtype=torch.bool, device=a.device)
-                idle[[rows[s] for s in live]] = False
+                idle[[rows[s] for s in running]] = False
                 if bool(idle.any()):
                     a = torch.where(idle[:, None], g.hold.to(a.device), a)
             else:
                 a = g.hold.clone()
-                if chunks:
-                    r = torch.as_tensor([rows[s] for s in host_actions], device=a.device)
-                    a[r] = torch.as_tensor(np.stack([x[i] for x in host_actions.values()]), device=a.device)
+                fed = [s for s in running if s in host_actions]
+                if fed:
+                    a[torch.as_tensor([rows[s] for s in fed], device=a.device)] = torch.as_tensor(
+                        np.stack([host_actions[s][i] for s in fed]), device=a.device)
             obs, _, term, trunc, info = env.step(a)
-            g.hold = a
-            self._frames(g, obs, [s for s in live if self.episodes[s].record is None])  # the last step's frame included
+            g.hold, g.obs = a, obs
+            self._frames(g, obs, running)  # the finishing step's frame included
             flags = torch.stack([info["progression"].float(), info["success"].float(), term.float(), trunc.float().to(term.device),
                                  *[info[k].float() for k in stage_keys]]).cpu().numpy()
             qt = None
