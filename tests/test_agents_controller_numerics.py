@@ -94,7 +94,7 @@ def test_exact_step_holds_a_pose_and_reaches_a_target(model64):
     assert torch.allclose(tau, gravity, atol=1e-3)  # at rest on target: gravity compensation only
 
 
-@pytest.mark.parametrize("model_rate", ["physics", "control"])
+@pytest.mark.parametrize("model_rate", ["path", "physics", "control"])
 def test_numpy_fast_path_equals_batched_torch_law(model_rate):
     """The CPU few-env numpy path computes the same torques as the batched torch path."""
     model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)

@@ -141,10 +141,16 @@ class DroidControlConfig:
     implicit_damping_values: tuple[float, ...] | None = None
     reference_qpos: tuple[float, ...] = DROID_RESET_QPOS
     joint_physics: JointPhysics | str = "realm"
-    # "physics": J, C(q, qd) and g(q) from the model every physics step (as Polymetis at 1 kHz).
-    # "control": refreshed once per control step, gravity corrected to first order in between;
-    # the feedback on q, qd still runs every physics step. Faster on CPU; see bench/step_rate.py.
-    model_rate: str = "physics"
+    # Where the model terms (J, M, C(q, qd), g(q)) come from; the feedback on q, qd runs every physics step.
+    # "path" (default): for every physics step, at the state the closed loop is predicted to reach then,
+    #   all ``path_steps`` steps in one batched evaluation (g corrected to first order for the measured
+    #   q); re-planned when the target changes or the arm leaves the path by > ``path_tolerance``.
+    # "physics": at the measured state, every physics step (as Polymetis at 1 kHz).
+    # "control": once per target, gravity corrected to first order in between (~2 mrad off).
+    # Cost: bench/step_rate.py; accuracy against the MuJoCo reference: docs/robot.md.
+    model_rate: str = "path"
+    path_steps: int = 8  # physics steps per plan (the ManiSkill binding sets its substeps per action)
+    path_tolerance: float = 1e-3  # rad; the terms' error grows with the distance to where they were taken
     law_hz: float = 1000.0  # "exact": the controller rate it reproduces (Polymetis / libfranka: 1 kHz)
 
     def __post_init__(self):
@@ -152,9 +158,19 @@ class DroidControlConfig:
             self.integrator = "implicit_damping" if self.implicit_damping else "explicit"
         if self.integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {self.integrator!r}")
+        if self.model_rate not in MODEL_RATES:
+            raise ValueError(f"model_rate must be one of {MODEL_RATES}, got {self.model_rate!r}")
+        if self.path_steps < 1 or not self.path_tolerance > 0:
+            raise ValueError(f"path_steps must be >= 1 and path_tolerance > 0, got {self.path_steps}, {self.path_tolerance}")
+
+    @property
+    def follows_path(self) -> bool:
+        """Terms along the predicted path: needs the exact integrator's prediction (else "physics")."""
+        return self.model_rate == "path" and self.integrator == "exact"
 
 
 INTEGRATORS = ("exact", "implicit_damping", "explicit")
+MODEL_RATES = ("path", "physics", "control")
 
 
 class DroidArmDriver:
@@ -187,9 +203,12 @@ class DroidArmDriver:
         ref = t(config.reference_qpos)[None]
         self.inertia_lower_bound = 0.5 * torch.diagonal(self.model.mass_matrix(ref)[0]) + self.armature
         self.q_target = torch.zeros(num_envs, model.dof, device=self.device)
-        self._terms = None  # cached (kp, kd, bias, q_ref, dg/dq) for model_rate="control"
-        if config.model_rate not in ("physics", "control"):
-            raise ValueError(f"model_rate must be 'physics' or 'control', got {config.model_rate!r}")
+        self._terms = self._terms_np = None  # cached model terms for model_rate="control" (torch, numpy path)
+        # model_rate="path": terms along the predicted path, (B, path_steps, ...); torch and numpy path
+        self._plan = self._plan_np = self._plan_dt = self._plan_np_dt = None
+        self._plan_k = self._plan_np_k = 0  # physics steps of the plan used so far
+        self._retarget = None  # (B,) bool: rows whose target changed since the numpy plan was made
+        self.path_steps = config.path_steps
         self.time = torch.zeros(num_envs, device=self.device)
         self.motor_torque = torch.zeros(num_envs, model.dof, device=self.device)  # commanded after limits/actuator
         self.applied_torque = torch.zeros(num_envs, model.dof, device=self.device)  # + joint friction and plant effects
@@ -215,7 +234,7 @@ class DroidArmDriver:
         idx = slice(None) if env_idx is None else env_idx
         self.q_target[idx] = q[idx, : self.model.dof]
         self.time[idx] = 0.0
-        self._terms = None
+        self._terms = self._terms_np = self._plan = self._plan_np = None
         self.motor_torque[idx] = 0.0
         self.applied_torque[idx] = 0.0
         self.velocity_correction[idx] = 0.0
@@ -227,7 +246,12 @@ class DroidArmDriver:
         # a new command refreshes J, C, g (model_rate="control") and Phi ("exact"); a replay that
         # re-sends the held command every physics step keeps them, as the benchmark does
         if q_target.shape != self.q_target.shape or not torch.equal(q_target, self.q_target):
-            self._terms = None
+            self._terms = self._terms_np = None
+            if q_target.shape == self.q_target.shape:  # rows with a new target re-plan (model_rate="path")
+                rows = (q_target != self.q_target).any(-1)
+                self._retarget = rows if self._retarget is None else self._retarget | rows
+            else:
+                self._plan = self._plan_np = None
         self.q_target = q_target
 
     def _bias(self, q: torch.Tensor, qd: torch.Tensor, frames: torch.Tensor) -> torch.Tensor:
@@ -240,11 +264,16 @@ class DroidArmDriver:
     def _law_terms(self, q: torch.Tensor, qd: torch.Tensor, gains: TorchGains, frames: torch.Tensor | None = None):
         """Stiffness and damping matrices and the feed-forward at configuration q: (kp, kd, bias)."""
         frames = self.model.link_frames(q) if frames is None else frames
-        jac = self.model.jacobian(q, frames)
+        kp, kd = self._stiffness_damping(self.model.jacobian(q, frames), gains)
+        return kp, kd, self._bias(q, qd, frames)
+
+    @staticmethod
+    def _stiffness_damping(jac: torch.Tensor, gains: TorchGains) -> tuple[torch.Tensor, torch.Tensor]:
+        """Joint-space Kp = diag(Kq) + J^T Kx J and Kd = diag(Kqd) + J^T Kxd J."""
         jt = jac.transpose(1, 2)
         kp = torch.diag_embed(gains.kq) + jt @ (gains.kx[..., None] * jac)
         kd = torch.diag_embed(gains.kqd) + jt @ (gains.kxd[..., None] * jac)
-        return kp, kd, self._bias(q, qd, frames)
+        return kp, kd
 
     def _gravity_jacobian(self, q: torch.Tensor, eps: float = 1e-3) -> torch.Tensor:
         """d g / d q (B, n, n) by central differences, one batched RNEA."""
@@ -272,10 +301,12 @@ class DroidArmDriver:
         else:  # nominal robot: skip the stage plumbing (this runs 8x per action)
             q_m, qd_m, q_t = q, qd, self.q_target
         gains = act.gains(self.gains) if act else self.gains
-        if exact:
+        if exact and self.config.follows_path:
+            step, bias = self._path_step(q_m, qd_m, q_t, gains, state if act else None, dt)
+        elif exact:
             # the closed loop's transition over this step from J(q), M(q) (model_rate="physics"), or
             # once per target (model_rate="control": cheaper, ~1-2 mrad RMS further from the 1 kHz law)
-            if self.config.model_rate == "physics" or self._terms is None:
+            if self.config.model_rate != "control" or self._terms is None:
                 frames = self.model.link_frames(q_m)
                 kp, kd, bias = self._law_terms(q_m, qd_m, gains, frames)
                 step = self._step_matrices(kp, kd, self._plant_mass(q_m, frames, state if act else None), dt)
@@ -285,7 +316,7 @@ class DroidArmDriver:
                 step, bias, q_ref, dg = self._terms
                 bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]
         else:
-            if self.config.model_rate == "physics" or self._terms is None:
+            if self.config.model_rate != "control" or self._terms is None:
                 kp, kd, bias = self._law_terms(q_m, qd_m, gains)
                 if self.config.model_rate == "control":
                     self._terms = (kp, kd, bias, q_m.clone(), self._gravity_jacobian(q_m))
@@ -335,75 +366,221 @@ class DroidArmDriver:
                 and self.num_envs <= self.NUMPY_MAX_ENVS)
 
     def torque_numpy(self, q: np.ndarray, qd: np.ndarray, dt: float) -> np.ndarray:
-        """``torque`` for the nominal exact law, in float64 numpy (same equations)."""
-        from realm_ms.agents.arm_model import NumpyArmModel
-
-        if getattr(self, "_np", None) is None:
-            f = lambda t: t.detach().cpu().double().numpy()  # noqa: E731
-            self._np = dict(model=NumpyArmModel(self.model), kq=f(self.gains.kq), kqd=f(self.gains.kqd),
-                            kx=f(self.gains.kx), kxd=f(self.gains.kxd), arm=np.diag(f(self.armature)),
-                            lim=f(self.effort_limits), fric=f(self.friction), inertia_lb=f(self.inertia_lower_bound))
-        k, cfg = self._np, self.config
-        npm = k["model"]
+        """``torque`` for the nominal exact law, in float64 numpy (same equations, as one affine map
+        per step: see ``_affine_step_numpy``)."""
+        k, cfg = self._numpy_constants(dt), self.config
         n = q.shape[1]
-        vc = self.velocity_correction.double().numpy()
-        qd_held, qd = qd, qd + vc
-        ticks = max(1, round(dt * cfg.law_hz))
-        t = dt / ticks
-        if cfg.model_rate == "physics" or self._terms is None:
-            frames = npm.link_frames(q)
-            jac = npm.jacobian(frames)
-            jt = jac.transpose(0, 2, 1)
-            kp = k["kq"][:, :, None] * np.eye(n) + jt @ (k["kx"][..., None] * jac)
-            kd = k["kqd"][:, :, None] * np.eye(n) + jt @ (k["kxd"][..., None] * jac)
-            bias, mass = npm.bias_and_mass(frames, qd if cfg.coriolis_feedforward else np.zeros_like(qd), cfg.gravity_compensation)
-            if not (cfg.coriolis_feedforward or cfg.gravity_compensation):
-                bias = np.zeros_like(q)
-            mass = mass + k["arm"]
-            minv = np.linalg.inv(mass)
-            p_, d_ = minv @ kp, minv @ kd
-            eye = k.setdefault("eye", np.eye(n))
-            phi = np.empty((q.shape[0], 2 * n, 2 * n))
-            phi[:, :n, :n] = eye - 0.5 * t * t * p_
-            phi[:, :n, n:] = t * eye - 0.5 * t * t * d_
-            phi[:, n:, :n] = -t * p_
-            phi[:, n:, n:] = eye - t * d_
-            phi = np.linalg.matrix_power(phi, ticks)
-            if cfg.model_rate == "control":  # refreshed per target, gravity to first order in between
-                self._terms = (kp, kd, bias, mass, minv, phi, q.copy(), self._gravity_jacobian_numpy(q))
+        state = k["state"]  # float32 [velocity correction, motor, applied, plant_prev torque], as on the torch path
+        qd_held, qd = qd, qd + state[:, :n]
+        ext = state[:, 3 * n :]
+        err = q - self.q_target.numpy()
+        z = np.concatenate([err, qd, ext, qd_held, q], 1)[..., None]
+        if cfg.follows_path:
+            affine, const, terms = self._path_step_numpy(q, qd, ext, dt)
         else:
-            kp, kd, bias, mass, minv, phi, q_ref, dg = self._terms
-            bias = bias + (dg @ (q - q_ref)[..., None])[..., 0]
-        err = q - self.q_target.double().numpy()
-        ext = self.plant_prev.double().numpy()
-        e_star = np.linalg.solve(kp, ext[..., None])[..., 0]
-        x0 = np.concatenate([err, qd], 1)
-        x1 = (phi @ np.concatenate([err - e_star, qd], 1)[..., None])[..., 0]
-        x1[:, :n] += e_star
+            if cfg.model_rate == "physics" or self._terms_np is None:
+                kp, kd, bias, mass, minv, phi = self._terms_numpy(q, qd, (k["kq"], k["kqd"], k["kx"], k["kxd"]), dt)
+                # "control": refreshed per target, gravity to first order in between
+                dg = self._gravity_jacobian_numpy(q) if cfg.model_rate == "control" else np.zeros((q.shape[0], n, n))
+                self._terms_np = (kp, kd, bias, mass, minv, *self._affine_step_numpy(kp, kd, mass, phi, bias, dg, q, None, dt), dg, q.copy())
+            kp, kd, bias, mass, minv, affine, const, dg, q_ref = self._terms_np
+            terms = lambda: (kp, kd, mass, minv, bias + (dg @ (q - q_ref)[..., None])[..., 0])  # noqa: E731
+        y = (affine @ z)[..., 0] + const
+        # rows: law torque at the step's start and end (vs the limits), distance to the planned path
+        flags = np.abs(y[:, : 3 * n]) > k["bounds"]
+        if flags.any():
+            if cfg.follows_path and flags[:, 2 * n :].any():  # off the path: re-plan those rows
+                self._plan_np_k -= 1
+                affine, const, terms = self._path_step_numpy(q, qd, ext, dt, off=flags[:, 2 * n :].any(-1))
+                y = (affine @ z)[..., 0] + const
+            sat = (np.abs(y[:, : 2 * n]) > k["bounds"][: 2 * n]).any(-1)
+            if sat.any():  # the law saturates within the step: its ticks with the clipped torque
+                self._saturated_ticks_numpy(y, sat, err, qd, qd_held, ext, terms(), dt)
+        tau = y[:, 3 * n : 4 * n]
         lim = k["lim"]
-        ends = np.stack([x0, x1])
-        tau_ends = -(kp @ ends[..., :n, None] + kd @ ends[..., n:, None])[..., 0] + bias
-        sat = (np.abs(tau_ends) > lim).any(-1).any(0)
-        for r in np.nonzero(sat)[0]:  # the law saturates: its ticks with the clipped torque
+        clamped = np.minimum(np.maximum(tau, -lim), lim)
+        held = (np.abs(clamped - tau) < 1e-4).all(-1)
+        friction = k["neg_fric"] * np.tanh(qd * k["inv_fric_v"])
+        cap = k["inertia_lb_dt"] * np.abs(qd)
+        friction = np.minimum(np.maximum(friction, -cap), cap)
+        state[:, :n] = y[:, 4 * n :]
+        if not held.all():  # where the torque was limited the prediction does not hold: no correction
+            state[~held, :n] = 0.0
+        state[:, n : 2 * n] = clamped
+        state[:, 2 * n : 3 * n] = out = clamped + friction
+        state[:, 3 * n :] = friction
+        self.time += dt
+        return out
+
+    def _saturated_ticks_numpy(self, y, sat, err, qd, qd_held, ext, terms: tuple, dt: float) -> None:
+        """Rows of y (see ``torque_numpy``) where the law saturates, from its ticks with the clipped torque."""
+        kp, kd, mass, minv, bias = terms
+        lim, n, ticks = self._np["lim"], err.shape[1], self._ticks(dt)
+        t = dt / ticks
+        for r in np.nonzero(sat)[0]:
             e, v = err[r], qd[r]
             for _ in range(ticks):
                 tau = np.clip(-(kp[r] @ e + kd[r] @ v) + bias[r], -lim, lim)
                 a = minv[r] @ (tau - bias[r] + ext[r])
                 e, v = e + t * v + 0.5 * t * t * a, v + t * a
-            x1[r] = np.concatenate([e, v])
-        v_avg = (x1[:, :n] - err) / dt
-        tau = (mass @ ((v_avg - qd_held) / dt)[..., None])[..., 0] + bias - ext
-        clamped = np.clip(tau, -lim, lim)
-        held = (np.abs(clamped - tau) < 1e-4).all(-1, keepdims=True)
-        self.velocity_correction = torch.from_numpy(np.where(held, x1[:, n:] - v_avg, 0.0).astype(np.float32))
-        self.motor_torque = torch.from_numpy(clamped.astype(np.float32))
-        friction = -k["fric"] * np.tanh(qd / self.joint_physics.friction_velocity)
-        cap = k["inertia_lb"] * np.abs(qd) / dt
-        out = clamped + np.clip(friction, -cap, cap)
-        self.applied_torque = torch.from_numpy(out.astype(np.float32))
-        self.plant_prev = torch.from_numpy((out - clamped).astype(np.float32))
-        self.time = self.time + dt
-        return out
+            v_avg = (e - err[r]) / dt
+            y[r, 3 * n : 4 * n] = mass[r] @ ((v_avg - qd_held[r]) / dt) + bias[r] - ext[r]
+            y[r, 4 * n :] = v - v_avg
+
+    def _affine_step_numpy(self, kp, kd, mass, phi, bias, dg, q_ref, q_path, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The exact step (``_exact_torque`` + feed-forward) as one affine map, batched over the leading
+        axis: y = G z + c with z = [q - q*, qd, load, qd_held, q] (5n) and y = [law torque at the step's
+        start, at its end, q - q_path (0 without a path), motor torque, velocity correction] (5n). The closed loop's end
+        state is x1 = Phi x0 + W load (W = (I - Phi)[:, :n] Kp^-1: the load's equilibrium shift), and
+        the feed-forward is g0 + dg (q - q_ref). One matmul per physics step instead of ~60 tiny ops."""
+        m, n = kp.shape[:2]
+        eye = self._np["eye"]
+        a = np.concatenate([phi, (np.eye(2 * n) - phi)[:, :, :n] @ np.linalg.inv(kp)], 2)  # x1 = A [e, qd, load]
+        law = np.concatenate([kp, kd], 2)
+        dq = a[:, :n].copy()  # q1 - e = (A_q - [I 0 0]) [e, qd, load]
+        dq[:, :, :n] -= eye
+        g = np.zeros((m, 5 * n, 5 * n))
+        g[:, :n, : 2 * n] = -law
+        g[:, n : 2 * n, : 3 * n] = -law @ a
+        if q_path is not None:
+            g[:, 2 * n : 3 * n, 4 * n :] = eye
+        g[:, 3 * n : 4 * n, : 3 * n] = mass @ dq / (dt * dt)  # M (v_avg - qd_held) / dt + ff - load
+        g[:, 3 * n : 4 * n, 2 * n : 3 * n] -= eye
+        g[:, 3 * n : 4 * n, 3 * n : 4 * n] = -mass / dt
+        g[:, 4 * n :, : 3 * n] = a[:, n:] - dq / dt  # v1 - v_avg
+        for i in (0, 1, 3):
+            g[:, i * n : (i + 1) * n, 4 * n :] = dg
+        c = bias - (dg @ q_ref[..., None])[..., 0]
+        return g, np.concatenate([c, c, np.zeros_like(c) if q_path is None else -q_path, c, np.zeros_like(c)], 1)
+
+    def _numpy_constants(self, dt: float) -> dict:
+        if getattr(self, "_np", None) is None:
+            from realm_ms.agents.arm_model import NumpyArmModel
+
+            f = lambda t: t.detach().cpu().double().numpy()  # noqa: E731
+            self._np = dict(model=NumpyArmModel(self.model), kq=f(self.gains.kq), kqd=f(self.gains.kqd),
+                            kx=f(self.gains.kx), kxd=f(self.gains.kxd), arm=np.diag(f(self.armature)),
+                            lim=f(self.effort_limits), lim2=np.tile(f(self.effort_limits), 2), eye=np.eye(self.model.dof),
+                            neg_fric=-f(self.friction), inv_fric_v=1.0 / self.joint_physics.friction_velocity)
+        k = self._np
+        if k.get("dt") != dt:  # the friction limiter's impulse bound per step
+            k["dt"], k["inertia_lb_dt"] = dt, self.inertia_lower_bound.double().numpy() / dt
+            lim = k["lim"]
+            k["bounds"] = np.concatenate([lim, lim, np.full_like(lim, self.config.path_tolerance)])
+        if k.get("views") is None or k["views"][0] is not self.velocity_correction or k["views"][3] is not self.plant_prev:
+            # one float32 buffer behind the four state tensors (reset() writes them in place)
+            names = ("velocity_correction", "motor_torque", "applied_torque", "plant_prev")
+            buf = torch.cat([getattr(self, name).float() for name in names], 1).contiguous()
+            views = torch.chunk(buf, 4, 1)
+            for name, v in zip(names, views):
+                setattr(self, name, v)
+            k["views"], k["state"] = views, buf.numpy()
+        return self._np
+
+    def _terms_numpy(self, q, qd, gains: tuple, dt: float) -> tuple:
+        """(Kp, Kd, feed-forward, M, M^-1, Phi) at (q, qd): ``_law_terms`` + ``_step_matrices``."""
+        k, cfg = self._np, self.config
+        npm = k["model"]
+        frames = npm.link_frames(q)
+        kp, kd = self._stiffness_damping_numpy(npm.jacobian(frames), gains)
+        world = npm.world(frames)
+        if cfg.coriolis_feedforward or cfg.gravity_compensation:
+            ff = npm.bias(world, qd if cfg.coriolis_feedforward else np.zeros_like(qd), cfg.gravity_compensation)
+        else:
+            ff = np.zeros_like(q)
+        mass = npm.mass(world) + k["arm"]
+        minv = np.linalg.inv(mass)
+        return kp, kd, ff, mass, minv, self._transition_numpy(minv, kp, kd, dt)
+
+    def _stiffness_damping_numpy(self, jac, gains: tuple) -> tuple:
+        kq, kqd, kx, kxd = gains
+        eye, jt = self._np["eye"], jac.transpose(0, 2, 1)
+        return kq[:, :, None] * eye + jt @ (kx[..., None] * jac), kqd[:, :, None] * eye + jt @ (kxd[..., None] * jac)
+
+    def _transition_numpy(self, minv, kp, kd, dt: float) -> np.ndarray:
+        eye, n, ticks = self._np["eye"], kp.shape[1], self._ticks(dt)
+        t = dt / ticks
+        p_, d_ = minv @ kp, minv @ kd
+        phi = np.empty((kp.shape[0], 2 * n, 2 * n))
+        phi[:, :n, :n] = eye - 0.5 * t * t * p_
+        phi[:, :n, n:] = t * eye - 0.5 * t * t * d_
+        phi[:, n:, :n] = -t * p_
+        phi[:, n:, n:] = eye - t * d_
+        return np.linalg.matrix_power(phi, ticks)
+
+    def _plan_path_numpy(self, q, qd, q_t, ext, gains: tuple, dt: float, steps: int, eps: float = 1e-3) -> dict:
+        """``_plan_path`` in numpy; the gravity Jacobian's 2n configurations join the path's batch."""
+        k, cfg = self._np, self.config
+        npm, arm, (b, n) = k["model"], k["arm"], q.shape
+        frames = npm.link_frames(q)
+        kp, kd = self._stiffness_damping_numpy(npm.jacobian(frames), gains)
+        phi = self._transition_numpy(np.linalg.inv(npm.mass_matrix(frames) + arm), kp, kd, dt)
+        e_star = np.linalg.solve(kp, ext[..., None])[..., 0]
+        x = np.concatenate([q - q_t - e_star, qd], 1)[..., None]
+        xs = [x]
+        for _ in range(steps - 1):
+            x = phi @ x
+            xs.append(x)
+        xs = np.concatenate(xs, -1).transpose(0, 2, 1)
+        q_path = xs[..., :n] + (q_t + e_star)[:, None]
+        q_path[:, 0] = q
+        m = b * steps
+        qs = q_path.reshape(m, n)
+        qds = xs[..., n:].reshape(m, n) if cfg.coriolis_feedforward else np.zeros((m, n))
+        if cfg.gravity_compensation:  # dg/dq at q by central differences, in the same batch
+            d = eps * k["eye"]
+            qs = np.concatenate([qs, (q[:, None] + d).reshape(-1, n), (q[:, None] - d).reshape(-1, n)])
+            qds = np.concatenate([qds, np.zeros((2 * b * n, n))])
+        frames = npm.link_frames(qs)
+        world = npm.world(frames)
+        kp, kd = self._stiffness_damping_numpy(npm.jacobian(frames[:m]), tuple(np.repeat(g, steps, 0) for g in gains))
+        mass = npm.mass(tuple(w[:m] for w in world)) + arm
+        minv = np.linalg.inv(mass)
+        dg = np.zeros((b, n, n))
+        if cfg.coriolis_feedforward or cfg.gravity_compensation:
+            ff = npm.bias(world, qds, cfg.gravity_compensation)
+            bias = ff[:m]
+            if cfg.gravity_compensation:
+                dg = ((ff[m : m + b * n] - ff[m + b * n :]) / (2 * eps)).reshape(b, n, n).transpose(0, 2, 1)
+        else:
+            bias = np.zeros((m, n))
+        phi = self._transition_numpy(minv, kp, kd, dt)
+        affine, const = self._affine_step_numpy(kp, kd, mass, phi, bias, np.repeat(dg, steps, 0), qs[:m], qs[:m], dt)
+        terms = dict(bias=bias, mass=mass, minv=minv, kp=kp, kd=kd, affine=affine, const=const)
+        plan = {key: v.reshape(b, steps, *v.shape[1:]) for key, v in terms.items()}
+        plan.update(q=q_path, dg=dg)
+        return plan
+
+    def _path_step_numpy(self, q, qd, ext, dt: float, off: np.ndarray | None = None) -> tuple:
+        """``_path_step`` in numpy: this physics step's affine map and, for the saturated case, its
+        (Kp, Kd, M, M^-1, feed-forward). ``off``: rows found off the path (re-planned)."""
+        p, k, steps = self._plan_np, self._plan_np_k, self.path_steps
+        full, rows = p is None or self._plan_np_dt != dt or k >= steps, None
+        if not full:
+            need = off
+            if self._retarget is not None:
+                need = self._retarget.numpy() if need is None else need | self._retarget.numpy()
+            if need is not None and need.any():
+                rows = np.nonzero(need)[0]
+                full = len(rows) == q.shape[0]
+        self._retarget = None
+        if full or rows is not None:
+            c, q_t = self._np, self.q_target.numpy()
+            gains = (c["kq"], c["kqd"], c["kx"], c["kxd"])
+            if full:
+                self._plan_np, self._plan_np_dt, k = self._plan_path_numpy(q, qd, q_t, ext, gains, dt, steps), dt, 0
+                p = self._plan_np
+            else:
+                new = self._plan_path_numpy(q[rows], qd[rows], q_t[rows], ext[rows], tuple(g[rows] for g in gains), dt, steps - k)
+                for key, v in new.items():
+                    if key == "dg":
+                        p[key][rows] = v
+                    else:
+                        p[key][rows, k:] = v
+        self._plan_np_k = k + 1
+        terms = lambda: (p["kp"][:, k], p["kd"][:, k], p["mass"][:, k], p["minv"][:, k],  # noqa: E731
+                         p["bias"][:, k] + (p["dg"] @ (q - p["q"][:, k])[..., None])[..., 0])
+        return p["affine"][:, k], p["const"][:, k], terms
 
     def _gravity_jacobian_numpy(self, q: np.ndarray, eps: float = 1e-3) -> np.ndarray:
         """``_gravity_jacobian`` in numpy: d g / d q (B, n, n) by central differences."""
@@ -432,8 +609,16 @@ class DroidArmDriver:
         exactly  Phi_T = [[I - T^2/2 P, T I - T^2/2 D], [-T P, I - T D]],  P = M^-1 Kp, D = M^-1 Kd,
         and Phi = Phi_T^n with n = round(dt * law_hz) ticks of T = dt / n."""
         mass, minv = plant_mass
+        ticks = self._ticks(dt)
+        return mass, minv, self._transition(minv, kp, kd, dt), dt, kp, kd, ticks
+
+    def _ticks(self, dt: float) -> int:
+        return max(1, round(dt * self.config.law_hz))
+
+    def _transition(self, minv: torch.Tensor, kp: torch.Tensor, kd: torch.Tensor, dt: float) -> torch.Tensor:
+        """Phi_T^n (see ``_step_matrices``), batched (B, 2n, 2n)."""
         n = kp.shape[1]
-        ticks = max(1, round(dt * self.config.law_hz))
+        ticks = self._ticks(dt)
         t = dt / ticks
         p, d = minv @ kp, minv @ kd
         eye = self._eye.to(kp.dtype)
@@ -442,7 +627,73 @@ class DroidArmDriver:
         phi[:, :n, n:] = t * eye - (0.5 * t * t) * d
         phi[:, n:, :n] = -t * p
         phi[:, n:, n:] = eye - t * d
-        return mass, minv, torch.linalg.matrix_power(phi, ticks), dt, kp, kd, ticks
+        return torch.linalg.matrix_power(phi, ticks)
+
+    # ------------------------------------------------------------------ model_rate="path"
+    _STEP_TERMS = ("q", "bias", "mass", "minv", "phi", "kp", "kd")  # (B, steps, ...) in a plan; "target", "dg" per row
+
+    def _plan_path(self, q, qd, q_t, gains: TorchGains, extra_inertia, ext, dt: float, steps: int) -> dict:
+        """Model terms for the next ``steps`` physics steps, each at the state the closed loop is
+        predicted to reach at that step: one batched evaluation instead of one per step.
+
+        The path is predicted with the terms at q held (the model moves little over a control step,
+        and the prediction only decides where the terms are taken); the terms along it are then the
+        model's own. ``dg`` (dg/dq at q) corrects gravity to first order for the measured q."""
+        m, (b, n) = self.model, q.shape
+        arm = torch.diag_embed(self.armature)
+        frames = m.link_frames(q)
+        kp, kd = self._stiffness_damping(m.jacobian(q, frames), gains)
+        mass = m.mass_matrix(q, frames) + arm + (0.0 if extra_inertia is None else extra_inertia)
+        phi = self._transition(torch.linalg.inv(mass), kp, kd, dt)
+        e_star = torch.linalg.solve(kp, ext[..., None])[..., 0]  # a constant load shifts the equilibrium
+        x = torch.cat([q - q_t - e_star, qd], 1)[..., None]
+        xs = [x]
+        for _ in range(steps - 1):
+            x = phi @ x
+            xs.append(x)
+        xs = torch.cat(xs, -1).transpose(1, 2)  # (b, steps, 2n)
+        q_path = xs[..., :n] + (q_t + e_star)[:, None]
+        q_path[:, 0] = q  # exact at the first step
+        qs, qds = q_path.reshape(b * steps, n), xs[..., n:].reshape(b * steps, n)
+        rep = lambda x: x.repeat_interleave(steps, 0)  # noqa: E731
+        frames = m.link_frames(qs)
+        kp, kd = self._stiffness_damping(m.jacobian(qs, frames), gains.map(rep))
+        mass = m.mass_matrix(qs, frames) + arm + (0.0 if extra_inertia is None else rep(extra_inertia))
+        minv = torch.linalg.inv(mass)
+        terms = dict(bias=self._bias(qs, qds, frames), mass=mass, minv=minv, phi=self._transition(minv, kp, kd, dt), kp=kp, kd=kd)
+        plan = {key: v.reshape(b, steps, *v.shape[1:]) for key, v in terms.items()}
+        plan.update(q=q_path, target=q_t.clone(), dg=self._gravity_jacobian(q))
+        return plan
+
+    def _path_step(self, q_m, qd_m, q_t, gains: TorchGains, state, dt: float) -> tuple[tuple, torch.Tensor]:
+        """(step matrices, feed-forward) for this physics step from the plan. A used-up plan is renewed
+        for all rows; rows whose target changed or whose arm left the path by > ``path_tolerance``
+        (contact, saturation, latency) get a new plan for the rest of the horizon."""
+        p, k, steps = self._plan, self._plan_k, self.path_steps
+        full, rows = p is None or self._plan_dt != dt or k >= steps, None
+        if not full:
+            off = (q_m - p["q"][:, k]).abs().amax(-1)
+            need = (q_t != p["target"]).any(-1) | (off > self.config.path_tolerance)
+            if bool(need.any()):
+                rows = torch.nonzero(need)[:, 0]
+                full = len(rows) == q_m.shape[0]
+        if full or rows is not None:
+            extra = self.actuation.plant_inertia(state) if state is not None else None
+            if full:
+                self._plan, self._plan_dt, k = self._plan_path(q_m, qd_m, q_t, gains, extra, self.plant_prev, dt, steps), dt, 0
+                p = self._plan
+            else:
+                new = self._plan_path(q_m[rows], qd_m[rows], q_t[rows], gains.map(lambda x: x[rows]),
+                                      None if extra is None else extra[rows], self.plant_prev[rows], dt, steps - k)
+                for key, v in new.items():
+                    if key in self._STEP_TERMS:
+                        p[key][rows, k:] = v
+                    else:
+                        p[key][rows] = v
+        self._plan_k = k + 1
+        mass, minv, phi, kp, kd = (p[key][:, k] for key in ("mass", "minv", "phi", "kp", "kd"))
+        bias = p["bias"][:, k] + (p["dg"] @ (q_m - p["q"][:, k])[..., None])[..., 0]
+        return (mass, minv, phi, dt, kp, kd, self._ticks(dt)), bias
 
     def _exact_torque(self, err: torch.Tensor, qd: torch.Tensor, qd_held: torch.Tensor, step: tuple, bias: torch.Tensor):
         """Motor torque (without feed-forward) that moves the plant to the closed loop's position after
@@ -528,6 +779,7 @@ class DroidJointImpedanceController(BaseController):
         self.actuation = ActuationModel()
         self.driver = DroidArmDriver(config.model_factory(), config.control, scene.num_envs, self.device, self.actuation)
         self.driver.allow_numpy = True
+        self.driver.path_steps = self._sim_steps  # one plan per action
         self._idx = self.active_joint_indices
         self._qf_cpu = None  # reusable qf buffer (CPU backend)
 
@@ -574,9 +826,12 @@ class DroidJointImpedanceController(BaseController):
             if self._qf_cpu is None:
                 self._idx_np = self._idx.cpu().numpy()
                 self._qf_cpu = np.zeros(obj.dof, dtype=np.float32)
-            idx = self._idx_np
-            q, qd = torch.from_numpy(obj.qpos[idx][None]), torch.from_numpy(obj.qvel[idx][None])
-            self._qf_cpu[idx] = self.driver.torque(q, qd, self._dt)[0].numpy()
+            idx, drv = self._idx_np, self.driver
+            q, qd = obj.qpos[idx][None], obj.qvel[idx][None]
+            if drv._numpy_path():
+                self._qf_cpu[idx] = drv.torque_numpy(q.astype(np.float64), qd.astype(np.float64), self._dt)[0]
+            else:
+                self._qf_cpu[idx] = drv.torque(torch.from_numpy(q), torch.from_numpy(qd), self._dt)[0].numpy()
             obj.qf = self._qf_cpu
 
     def get_state(self) -> dict:
