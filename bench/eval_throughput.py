@@ -47,7 +47,7 @@ def _pickcube_worker(conn, width: int, height: int) -> None:
             obs, _, term, trunc, _ = env.step(hold)
         if bool(trunc[0]) or bool(term[0]):
             env.reset()
-        img = obs["sensor_data"]["base_camera"]["rgb"][0].numpy()
+        img = obs["sensor_data"]["base_camera"]["rgb"][0].cpu().numpy()  # cuda tensors where SAPIEN renders on a GPU
         conn.send((CHUNK, np.ascontiguousarray(img)))
     env.close()
 
@@ -61,13 +61,17 @@ def bench_pickcube(n: int, seconds: float, width: int, height: int) -> float:
         p.start()
         pipes.append(a)
         procs.append(p)
-    for c in pipes:
+    for c, p in zip(pipes, procs):
+        if not c.poll(300):  # a dead or stuck worker must not hang the bench
+            raise RuntimeError(f"PickCube worker {p.pid} did not start (exit code {p.exitcode})")
         assert c.recv() == "ready"
     steps, t0 = 0, time.perf_counter()
     while time.perf_counter() - t0 < seconds:
         for c in pipes:
             c.send(1)
         for c in pipes:
+            if not c.poll(120):
+                raise RuntimeError("a PickCube worker stopped answering")
             k, _ = c.recv()
             steps += k
     rate = steps / (time.perf_counter() - t0)
@@ -123,11 +127,15 @@ def main(argv=None) -> int:
     ns = [int(v) for v in args.workers.split(",")]
     cores = os.cpu_count()
     rows = []
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
     for n in ns:
         realm = bench_realm(n, args.seconds, args.task, w, h)
+        print(f"workers {n}: {args.task} {realm:.1f} env-steps/s (3 cams)", flush=True)
         cube = bench_pickcube(n, args.seconds, w, h)
+        print(f"workers {n}: PickCube-v1 {cube:.1f} env-steps/s (1 cam)", flush=True)
         rows.append(dict(workers=n, realm_steps_s=realm, pickcube_steps_s=cube))
-        print(f"workers {n}: {args.task} {realm:.1f} env-steps/s (3 cams), PickCube-v1 {cube:.1f} env-steps/s (1 cam)", flush=True)
+        out.write_text(json.dumps(dict(cores=cores, size=[w, h], task=args.task, rows=rows, partial=True), indent=2))
     base_r, base_c = rows[0]["realm_steps_s"] / ns[0], rows[0]["pickcube_steps_s"] / ns[0]
     print(f"\n{cores} CPU cores seen; {w}x{h} raster cameras; zero policy; chunks of {CHUNK}")
     print(f"{'workers':>7s} {'REALM st/s':>11s} {'eff.':>6s} {'PickCube st/s':>14s} {'eff.':>6s} {'REALM/PickCube':>15s}")
@@ -136,8 +144,6 @@ def main(argv=None) -> int:
         r["pickcube_efficiency"] = r["pickcube_steps_s"] / (r["workers"] * base_c)
         print(f"{r['workers']:7d} {r['realm_steps_s']:11.1f} {r['realm_efficiency']:6.2f} {r['pickcube_steps_s']:14.1f} "
               f"{r['pickcube_efficiency']:6.2f} {r['realm_steps_s'] / r['pickcube_steps_s']:15.2f}")
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(dict(cores=cores, size=[w, h], task=args.task, rows=rows), indent=2))
     return 0
 

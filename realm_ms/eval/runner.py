@@ -179,12 +179,19 @@ class EpisodeRunner:
         if actions is not None:
             n = min(n, len(actions))
         done = False
+        # An open-loop chunk is looked at only after its last action: the steps before it need no
+        # camera capture (unless every frame goes into a video, or an env-side policy reads obs).
+        sparse = actions is not None and self.cfg.videos == "none"
         for i in range(n):
             if actions is not None:
                 a = torch.as_tensor(np.asarray(actions[i], dtype=np.float32))[None]
             else:
                 a = self.env_policy.act(self.obs)
-            self.obs, _, term, trunc, info = env.step(a)
+            u.capture_sensors = not sparse or i == n - 1
+            try:
+                self.obs, _, term, trunc, info = env.step(a)
+            finally:
+                u.capture_sensors = True
             self.info = info
             self.steps += 1
             prog = float(info["progression"][0])

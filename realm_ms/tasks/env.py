@@ -111,6 +111,11 @@ class RealmEnv(BaseEnv):
         # ---
         self._action_warned: set[str] = set()
         self._contacts_dirty = False  # simulated since the last (re)build: see _forget_contacts
+        # Cameras capture on every step unless a caller that reads images only now and then (a policy
+        # executing an action chunk open-loop) turns this off for the steps in between: those steps
+        # then return the last captured images. Rendering dominates a step with cameras.
+        self.capture_sensors = True
+        self._last_sensor_data: dict | None = None
         super().__init__(*args, robot_uids=robot_uids, **kwargs)
         # the full description, ManiSkill's part included: records store it, make_env re-creates the env
         self.config = dataclasses.replace(
@@ -343,13 +348,18 @@ class RealmEnv(BaseEnv):
         if self.config.isolate_episodes and self._contacts_dirty and not self.gpu_sim_enabled and "env_idx" not in options:
             options["reconfigure"] = True  # a new PhysX scene: see RealmEnvConfig.isolate_episodes
         self._pert_fresh = False
+        self._last_sensor_data = None  # a reset always captures
         obs, info = super().reset(seed=seed, options=options)
         self.perturbations.override = None
         info["perturbation"] = self.perturbations.record()
         return obs, info
 
     def _get_obs_sensor_data(self, apply_texture_transforms: bool = True) -> dict:
-        return self.perturbations.on_observation(self, super()._get_obs_sensor_data(apply_texture_transforms))
+        if not self.capture_sensors and self._last_sensor_data is not None:
+            return self._last_sensor_data
+        data = self.perturbations.on_observation(self, super()._get_obs_sensor_data(apply_texture_transforms))
+        self._last_sensor_data = data
+        return data
 
     def step(self, action):
         obs, reward, _, truncated, info = super().step(self._checked_action(action))
