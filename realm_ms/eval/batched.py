@@ -286,6 +286,9 @@ class BatchedBackend(Backend):
         host_actions = {s: np.asarray(a[:n], dtype=np.float32) for s, a in chunks.items()}
         stage_keys = [f"stage_{st.lower()}" for st in self.episodes[live[0]].stages]
         obs = g.obs
+        # as EpisodeRunner: a chunk's observation is read after its last step only, so the steps
+        # before it skip camera capture (RealmEnv.capture_sensors) unless frames go into videos
+        sparse = g.env_policy is None and self.cfg.videos == "none"
         for i in range(n):
             running = [s for s in live if self.episodes[s].record is None]  # rows without an episode hold
             if g.env_policy is not None:
@@ -300,7 +303,11 @@ class BatchedBackend(Backend):
                 if fed:
                     a[torch.as_tensor([rows[s] for s in fed], device=a.device)] = torch.as_tensor(
                         np.stack([host_actions[s][i] for s in fed]), device=a.device)
-            obs, _, term, trunc, info = env.step(a)
+            u.capture_sensors = not sparse or i == n - 1
+            try:
+                obs, _, term, trunc, info = env.step(a)
+            finally:
+                u.capture_sensors = True
             g.hold, g.obs = a, obs
             self._frames(g, obs, running)  # the finishing step's frame included
             flags = torch.stack([info["progression"].float(), info["success"].float(), term.float(), trunc.float().to(term.device),
