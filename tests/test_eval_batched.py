@@ -285,3 +285,21 @@ def test_policy_errors_fail_their_slot_and_unsupported_cells_are_recorded():
             assert a["status"] == "error" and a["error"] == "down" and a["steps"] == 0 and a["instruction"] == f"seed {s}"
         else:
             assert a["status"] == "ok" and a["steps"] == _goal(s) + TAIL
+
+
+def test_gpu_probe_reports_a_missing_physx_library_without_fetching_it(monkeypatch, tmp_path):
+    import sapien
+
+    import realm_ms.eval.workers as w
+
+    def no_fetch(*a, **k):
+        raise AssertionError("the probe must not start SAPIEN's download")
+
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+    monkeypatch.setattr(w, "gpu_physx_library", lambda: tmp_path / "libPhysXGpu_64.so")
+    monkeypatch.setattr(sapien.physx, "PhysxGpuSystem", no_fetch)
+    ok, why = w.gpu_physx_status()
+    assert not ok and "not installed" in why and "sapien.physx.enable_gpu()" in why
+    with pytest.raises(RuntimeError, match="--backend gpu: SAPIEN's GPU PhysX library is not installed"):
+        w.choose_backend("gpu", RunConfig(), 2)
+    assert isinstance(w.choose_backend("auto", RunConfig(), 1), w.InlineBackend)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import sys
 import traceback
 from multiprocessing import shared_memory
 
@@ -294,12 +295,22 @@ def _crash_record(key: EpisodeKey | None, cfg: RunConfig, msg: str, tb: str | No
 
 
 # ---------------------------------------------------------------------------------------- GPU / choice
-def gpu_physx_status() -> tuple[bool, str]:
-    """(available, reason): SAPIEN GPU PhysX needs a CUDA device and SAPIEN's CUDA PhysX library
-    (fetched by SAPIEN on first use; the fetch is bounded so an offline machine answers quickly)."""
-    import socket
+def gpu_physx_library():
+    """Where SAPIEN keeps its GPU PhysX library (``sapien.physx.enable_gpu`` downloads it there from GitHub on first use)."""
+    import platform
+    from pathlib import Path
 
-    old = socket.getdefaulttimeout()
+    import sapien
+
+    name = "PhysXGpu_64.dll" if platform.system() == "Windows" else "libPhysXGpu_64.so"
+    return Path.home() / ".sapien" / "physx" / sapien.physx.version() / name
+
+
+def gpu_physx_status() -> tuple[bool, str]:
+    """(available, reason): SAPIEN GPU PhysX needs a CUDA device and SAPIEN's GPU PhysX library.
+
+    A missing library is reported, not fetched: SAPIEN's own fetch has no timeout and would hang a
+    machine without internet access."""
     try:
         import torch
 
@@ -307,13 +318,14 @@ def gpu_physx_status() -> tuple[bool, str]:
             return False, "no CUDA device is visible (torch.cuda.is_available() is False)"
         import sapien
 
-        socket.setdefaulttimeout(30)
+        lib = gpu_physx_library()
+        if not sapien.physx.is_gpu_enabled() and not lib.exists():
+            return False, (f"SAPIEN's GPU PhysX library is not installed ({lib}); fetch it once on a machine with internet access: "
+                           "python -c 'import sapien; sapien.physx.enable_gpu()'")
         sapien.physx.PhysxGpuSystem()
         return True, "SAPIEN GPU PhysX available"
-    except Exception as e:  # noqa: BLE001  (SAPIEN raises plain RuntimeError/ImportError/download errors)
+    except Exception as e:  # noqa: BLE001  (SAPIEN raises plain RuntimeError/ImportError variants)
         return False, f"SAPIEN GPU PhysX unavailable: {type(e).__name__}: {e}"
-    finally:
-        socket.setdefaulttimeout(old)
 
 
 def _cpu_backend(cfg: RunConfig, workers: int, gpu: bool):
@@ -347,6 +359,8 @@ def choose_backend(kind: str, cfg: RunConfig, workers: int):
     gpu, why = gpu_physx_status() if kind in ("auto", "gpu", "batched") else (False, "")
     if kind == "auto":
         kind = "gpu" if gpu else "cpu"
+        if not gpu and not why.startswith("no CUDA device"):  # a GPU machine that could simulate on it: say why not
+            print(f"realm eval: GPU simulation unavailable ({why}); using CPU worker processes", file=sys.stderr)
     if kind == "gpu" and not gpu:
         raise RuntimeError(f"--backend gpu: {why}; use --backend cpu (N worker processes) instead")
     if kind not in BACKENDS:
