@@ -4,7 +4,8 @@ raster cameras at 320x180, next to ManiSkill's PickCube-v1 in the same scheme, i
 Scheme: N spawned worker processes, each stepping one CPU-physics env with rendering; the main
 process sends an 8-action chunk per round and gets the observation back (REALM: through shared
 memory via ``realm_ms.eval.workers.ProcessBackend``; PickCube: the same loop over a pipe, its one
-camera set to 320x180 and the same shader). Measured in steady state: a warm-up round per worker
+camera set to 320x180 and the same shader). Both capture images only at a chunk's last step, the
+one the policy sees. Measured in steady state: a warm-up round per worker
 (spawn, imports, env build) is excluded. Efficiency = steps/s(N) / (N * steps/s(1)).
 
     python bench/eval_throughput.py [--workers 1,2,4] [--seconds 30] [--task REALM-PickApple-v1]
@@ -38,12 +39,23 @@ def _pickcube_worker(conn, width: int, height: int) -> None:
                    sensor_configs=dict(width=width, height=height, shader_pack="default"))
     obs, _ = env.reset(seed=0)
     hold = env.unwrapped.agent.robot.get_qpos()[:, :8].clone()
+    # the same capture scheme as `realm eval`: only a chunk's last step renders (RealmEnv.capture_sensors)
+    u, capture, last = env.unwrapped, [True], {}
+    full = u._get_obs_sensor_data
+
+    def sensor_data(*args, **kwargs):
+        if capture[0] or "d" not in last:
+            last["d"] = full(*args, **kwargs)
+        return last["d"]
+
+    u._get_obs_sensor_data = sensor_data
     conn.send("ready")
     while True:
         cmd = conn.recv()
         if cmd is None:
             break
-        for _ in range(CHUNK):
+        for i in range(CHUNK):
+            capture[0] = i == CHUNK - 1
             obs, _, term, trunc, _ = env.step(hold)
         if bool(trunc[0]) or bool(term[0]):
             env.reset()
