@@ -234,6 +234,9 @@ def test_sub_env_slots_partial_resets_and_per_slot_bookkeeping():
     assert partial, "episodes of different lengths must restart their own sub-envs only"
     for seeds, idx in partial:
         assert len(idx) < 3 and len(seeds) == 3
+    for e in envs:  # the rows that run on keep their episode seeds in the list ManiSkill resets every row's seed from
+        for (prev, _), (seeds, idx) in zip(e.resets, e.resets[1:]):
+            assert idx is None or all(seeds[r] == prev[r] for r in range(3) if r not in idx)
     assert any(zero_copy) and not all(zero_copy)  # the batch itself when all rows come from one step, else stacked
 
 
