@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 
+import numpy as np
 import pytest
 import torch
 
@@ -12,6 +13,7 @@ pytest.importorskip("mani_skill")
 import realm_ms  # noqa: E402,F401
 from realm_ms.expert import SKILLS, make_expert, run_episode  # noqa: E402
 from realm_ms.expert.ik import ArmIK, top_down_rotation  # noqa: E402
+from realm_ms.expert.primitives import grasp_height, grasp_slice, pad_below_tcp  # noqa: E402
 from realm_ms.tasks import TASKS  # noqa: E402
 
 SEED = 0
@@ -52,6 +54,50 @@ def test_expert_actions_are_smooth():
             obs, *_ = env.step(a)
     finally:
         env.close()
+
+
+def test_pad_arc_model_matches_the_sim():
+    """``pad_below_tcp``: the pads swing down 14 mm as they close; the model the grasp height is
+    planned with matches the simulated pads (bounding boxes of their collision shapes) over the stroke."""
+    from realm_ms.agents.robotiq_2f85 import gripper_width, pad_links
+
+    env = gym.make("REALM-PickApple-v1", obs_mode="state")
+    try:
+        env.reset(seed=0)
+        u = env.unwrapped
+        q = u.agent.arm_qpos.clone()
+        seen = []
+        for g in (0.0, 0.3, 0.6, 0.9):
+            for _ in range(20):
+                env.step(torch.cat([q, torch.tensor([[g]])], 1))
+            tcp_z = float(u.agent.tcp_pose.p[0, 2])
+            pad_bottom = min(float(link._bodies[0].get_global_aabb_fast()[0][2]) for link in pad_links(u.agent.robot))
+            width = float(gripper_width(u.agent.robot.get_qpos(), u.agent.robot)[0])
+            seen.append(tcp_z - pad_bottom)
+            assert abs((tcp_z - pad_bottom) - pad_below_tcp(width)) < 1.5e-3, (g, width, tcp_z - pad_bottom)
+        assert seen[-1] - seen[0] > 0.01  # closing lowers the pads by more than a centimetre
+    finally:
+        env.close()
+
+
+def test_grasp_slice_follows_scale_and_shape():
+    """The grasp point is read off the object's mesh at its actual (perturbed) scale; a flat spoon
+    is pinched at its narrow neck, a uniform marker mid-length."""
+    from realm_ms.assets import get_object_spec
+
+    spoon = get_object_spec("proc/teaspoon/0?size=0.19")
+    one = np.ones(3)
+    sl = grasp_slice(spoon, one, spoon.extents)
+    assert sl.top < 0.02 and sl.width < 0.8 * spoon.extents[1]  # not across the bowl
+    squashed = np.array([1.2, 1.0, 0.5])
+    sl2 = grasp_slice(spoon, squashed, spoon.extents * squashed)
+    assert np.isclose(sl2.top, sl.top * 0.5, atol=1e-4) and np.isclose(sl2.point[0], sl.point[0] * 1.2, atol=0.02)
+    marker = get_object_spec("proc/marker/0?color=black&size=0.17")
+    sm = grasp_slice(marker, one, marker.extents)
+    assert abs(sm.point[0]) < 0.02 and np.isclose(sm.top, marker.extents[2], atol=2e-3)  # a polygonal cylinder
+    # planned heights: a flat object is pinched with the pads on the table, a tall one near mid-height
+    assert np.isclose(grasp_height(0.0, 0.008, 0.02) - pad_below_tcp(0.02), 0.0)
+    assert np.isclose(grasp_height(0.0, 0.17, 0.058) - pad_below_tcp(0.058), 0.075)
 
 
 @pytest.mark.parametrize("env_id", sorted(TASKS))

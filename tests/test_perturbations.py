@@ -152,6 +152,35 @@ def test_scene_factors_on_specs():
     assert s.instruction == "turn off the light switch" and "goal=off" in s.main.asset
 
 
+def test_sb_vrb_receivers_fit_the_object():
+    """A new verb's receiver lets its rubric finish: a 17 cm bottle gets a bowl deep enough for its
+    centre to sink below the PLACE_INTO band, stacked centres stay within MOVE_CLOSE's distance."""
+    from realm_ms.perturbations.common import object_spec
+    from realm_ms.perturbations.sb_vrb import INTO_RIM_BAND, receiver_fits
+    from realm_ms.tasks.progression import Thresholds
+
+    bottle = (0.058, 0.058, 0.17)
+    assert not receiver_fits("put", bottle, (0.15, 0.15, 0.046))  # a shallow bowl: centre 4 cm above the rim
+    assert receiver_fits("put", bottle, (0.185, 0.185, 0.081))
+    assert not receiver_fits("stack", bottle, (0.2, 0.15, 0.09))  # centres 13 cm apart once stacked
+    seen = {}
+    for env_id in ("REALM-PickWaterBottle-v1", "REALM-PickApple-v1", "REALM-RotateMarker-v1"):
+        for k in range(40):
+            s = drawn(env_id, "SB-VRB", [k]).specs[0]
+            if s.skill not in ("put", "stack"):
+                continue
+            main = object_spec(s.main.asset).extents * np.asarray(s.main.scale)
+            (t,) = s.by_role("target")
+            recv = object_spec(t.asset).extents * np.asarray(t.scale)
+            assert receiver_fits(s.skill, main, recv)
+            if s.skill == "put":
+                assert main[2] / 2 < recv[2] + INTO_RIM_BAND
+            else:
+                assert (main[2] + recv[2]) / 2 < Thresholds().move_close_dist
+            seen[(env_id, s.skill)] = t.asset
+    assert ("REALM-PickWaterBottle-v1", "put") in seen and ("REALM-PickWaterBottle-v1", "stack") in seen
+
+
 def test_composition_keeps_each_draw():
     """A composition draws each factor from its own stream: the same params as alone, both applied."""
     both = drawn("REALM-OpenDrawer-v1", ["S-LANG", "VB-MOBJ"], [5, 6]).record()["params"]

@@ -162,6 +162,7 @@ FLAT = 0.02  # m: objects lower than this are pinched with the pads skimming the
 PAD_FLOOR = 0.0  # m: pad bottoms on the table when pinching a flat object (closing lifts the hand ~1 mm)
 PAD_CLEARANCE = 0.003  # m between the pad bottoms and the table when the pads touch a taller object
 PAD_BELOW_TCP_OPEN = 0.0044  # m, pad bottoms under the TCP with the gripper open (measured on the sim)
+PAD_LENGTH = 0.0375  # m, the 2F-85 pads' vertical extent
 
 
 def pad_below_tcp(width: float) -> float:
@@ -179,13 +180,14 @@ def pad_below_tcp(width: float) -> float:
 
 def grasp_height(base: float, top: float, width: float) -> float:
     """TCP height for a top-down grasp of an object standing on ``base`` with its top at ``top``,
-    ``width`` across the pads: at the object's centre, but not so low that the gripper base hits
-    the top (fingers reach ~5 cm) nor that the pads, at contact, dig into the table. Flat objects
-    (spoon bowl, coin) are pinched with the pads just above the table at contact."""
-    below = pad_below_tcp(width)
-    if top - base < FLAT:
-        return base + PAD_FLOOR + below
-    return max(min((base + top) / 2, top - 0.035), base + PAD_CLEARANCE + below)
+    ``width`` across the pads. Chosen for where the pads' bottoms are once they touch the object
+    (``pad_below_tcp``): 1 cm below its mid-height, so the vertical pads meet a rounded object at its
+    widest (closing above the equator squeezes it down and out), and low enough that the 37.5 mm
+    pads cover a short object's top, but never into the table. Flat objects (a spoon, a coin) are
+    pinched with the pads on the table."""
+    h = top - base
+    pad_bottom = PAD_FLOOR if h < FLAT else max(PAD_CLEARANCE, min(h / 2 - 0.01, h - PAD_LENGTH + 0.0025))
+    return base + pad_bottom + pad_below_tcp(width)
 
 
 def grasp_yaw_for(extents, r: np.ndarray, ref: float = DEFAULT_YAW) -> float:
@@ -216,12 +218,16 @@ def object_geometry(ctx: "Ctx", obj) -> tuple:
     return asset, scale, ext
 
 
-def scaled_vertices(asset, scale) -> np.ndarray | None:
-    """The collision mesh's vertices in the object frame, at the object's scale (None: no mesh)."""
+def scaled_vertices(asset, scale, samples: int = 3000) -> np.ndarray | None:
+    """Points of the collision mesh's surface in the object frame, at the object's scale: its
+    vertices plus ``samples`` points spread over its faces (a low-poly cylinder has vertices only at
+    its ends), drawn with a fixed seed. None when the object has no mesh."""
     try:
         import trimesh
 
-        v = np.asarray(trimesh.load(str(asset.collision_path), force="mesh").vertices, float)
+        m = trimesh.load(str(asset.collision_path), force="mesh")
+        pts, _ = trimesh.sample.sample_surface(m, samples, seed=0)
+        v = np.concatenate([np.asarray(m.vertices, float), np.asarray(pts, float)])
     except Exception:
         return None
     return v * np.asarray(scale, float)
@@ -241,9 +247,10 @@ def grasp_slice(asset, scale, ext) -> GraspSlice:
     """Where to grasp a rigid object, in its (scaled) frame.
 
     Elongated objects are sliced along their long local axis; the expert grasps the middle of the
-    tallest run of slices that fit in the gripper (a spoon in the middle of its bowl, not by its 3 mm
-    handle nor at the bowl's tapering tip; a marker or banana mid-length). Compact objects: the
-    bounding-box centre."""
+    tallest run of slices that fit in the gripper, mid-length when the centre is in that run (a
+    marker, a banana); a flat object at the narrowest of its tallest slices (a spoon by its neck,
+    not by its 3 mm handle nor across its bowl, where lifting rolls it out of the pinch). Compact
+    objects: the bounding-box centre."""
     ext = np.asarray(ext, float)
     key = (asset.id, tuple(np.round(ext, 5)))
     if key in _PROFILE_CACHE:
@@ -254,14 +261,18 @@ def grasp_slice(asset, scale, ext) -> GraspSlice:
         ax = 0 if ext[0] >= ext[1] else 1
         lo, hi = v[:, ax].min(), v[:, ax].max()
         slices = []
-        for c in np.linspace(lo + 0.02, hi - 0.02, 15):
+        for c in [0.0, *np.linspace(lo + 0.02, hi - 0.02, 15)]:
             sel = np.abs(v[:, ax] - c) < 0.012
-            if sel.sum() >= 3 and np.ptp(v[sel, 1 - ax]) < 0.075:
+            if sel.sum() >= 10 and np.ptp(v[sel, 1 - ax]) < 0.075:
                 slices.append((c, v[sel, 2].max(), (v[sel, 1 - ax].max() + v[sel, 1 - ax].min()) / 2, np.ptp(v[sel, 1 - ax])))
         if slices:
             h_max = max(s[1] for s in slices)
-            tall = [s for s in slices if s[1] > h_max - 0.003]
-            mid = float(np.mean([s[0] for s in tall]))
+            tall = [s for s in slices if s[1] > h_max - min(0.003, 0.2 * h_max)]
+            # mid-length when the bounding-box centre is (nearly) as tall, else the middle of the tall run
+            mid = 0.0 if tall[0][0] == 0.0 else float(np.mean([s[0] for s in tall]))
+            if h_max < FLAT:  # a few-mm pinch holds on a narrow section (a spoon's neck), not across its bowl
+                w_min = min(s[3] for s in tall)
+                tall = [s for s in tall if s[3] < w_min + 0.003]
             c, h, m, w = min(tall, key=lambda s: abs(s[0] - mid))
             pt = np.zeros(3)
             pt[ax], pt[1 - ax], pt[2] = c, m, h
