@@ -808,9 +808,9 @@ class DroidJointImpedanceController(BaseController):
     def set_action(self, action):
         action = self._preprocess_action(action)
         if self.config.clip_to_joint_limits:
-            lo = torch.as_tensor(self.single_action_space.low, device=action.device)
-            hi = torch.as_tensor(self.single_action_space.high, device=action.device)
-            action = torch.maximum(torch.minimum(action, hi), lo)
+            if getattr(self, "_limits", None) is None or self._limits[0].device != action.device:
+                self._limits = tuple(torch.as_tensor(v, device=action.device) for v in (self.single_action_space.low, self.single_action_space.high))
+            action = torch.maximum(torch.minimum(action, self._limits[1]), self._limits[0])
         self.driver.set_target(action)
 
     def before_simulation_step(self):
@@ -824,7 +824,9 @@ class DroidJointImpedanceController(BaseController):
         else:  # physx_cpu: one articulation; numpy in/out, the same torch law
             obj = self.articulation._objs[0]
             if self._qf_cpu is None:
-                self._idx_np = self._idx.cpu().numpy()
+                idx = self._idx.cpu().numpy()
+                contiguous = np.array_equal(idx, np.arange(idx[0], idx[0] + len(idx)))
+                self._idx_np = slice(int(idx[0]), int(idx[0]) + len(idx)) if contiguous else idx  # a view, no gather
                 self._qf_cpu = np.zeros(obj.dof, dtype=np.float32)
             idx, drv = self._idx_np, self.driver
             q, qd = obj.qpos[idx][None], obj.qvel[idx][None]
