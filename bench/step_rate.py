@@ -1,8 +1,9 @@
 """Control steps per second of REALM-PickApple-v1 next to ManiSkill's PickCube-v1, same run, same machine.
 
-Modes: state obs (exact controller model every physics step, ``state_fastctrl`` with the model
-refreshed per control step, ``state_implicit`` with the former implicit-damping integrator instead
-of the step-exact one); 3 raster cameras at 224x224; 3 ray-traced (rt-fast) cameras at 128x128. PickCube
+Modes: state obs (the default exact law: model terms along the predicted path, one batched
+evaluation per action; ``state_physics`` with the terms taken every physics step, ``state_fastctrl``
+once per control step, ``state_implicit`` with the former implicit-damping integrator instead of the
+step-exact one); 3 raster cameras at 224x224; 3 ray-traced (rt-fast) cameras at 128x128. PickCube
 gets the same observation mode with its one camera at the same size/shader, so the ratio shows the
 cost of our robot (8 physics substeps of torque control, a 13-DoF gripper linkage, 3 cameras).
 With CUDA, also physx_cuda throughput for 64..1024 parallel envs (state obs).
@@ -26,6 +27,8 @@ import realm_ms  # noqa: F401
 
 MODES = {
     "state": dict(obs_mode="state"),
+    # same, with the controller's model terms taken at the measured state every physics step
+    "state_physics": dict(obs_mode="state", droid_control=dict(model_rate="physics")),
     # same, with the controller's model terms refreshed per control step (DroidControlConfig.model_rate)
     "state_fastctrl": dict(obs_mode="state", droid_control=dict(model_rate="control")),
     # the former integrator (damping on PhysX's implicit drive): what the step-exact default replaced
@@ -73,7 +76,7 @@ def rate(env, steps: int) -> float:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=200)
-    p.add_argument("--modes", default="state,state_fastctrl,state_implicit,raster224,rt128")
+    p.add_argument("--modes", default="state,state_physics,state_fastctrl,state_implicit,raster224,rt128")
     p.add_argument("--gpu-envs", default="64,256,1024")
     p.add_argument("--out", type=Path, default=Path("outputs/bench/step_rate.json"))
     args = p.parse_args()
@@ -87,7 +90,7 @@ def main() -> None:
             r[env_id] = rate(env, n)
             env.close()
         rows.append(dict(mode=mode, backend="physx_cpu", num_envs=1, steps=n, realm=r["REALM-PickApple-v1"], pickcube=r["PickCube-v1"]))
-        print(f"{mode:>10}: REALM-PickApple {r['REALM-PickApple-v1']:8.1f} steps/s | PickCube {r['PickCube-v1']:8.1f} steps/s | ratio {r['REALM-PickApple-v1'] / r['PickCube-v1']:.2f}x", flush=True)
+        print(f"{mode:>14}: REALM-PickApple {r['REALM-PickApple-v1']:8.1f} steps/s | PickCube {r['PickCube-v1']:8.1f} steps/s | ratio {r['REALM-PickApple-v1'] / r['PickCube-v1']:.2f}x", flush=True)
 
     if torch.cuda.is_available():
         for n_envs in [int(x) for x in args.gpu_envs.split(",")]:

@@ -168,5 +168,5 @@ def test_path_rate_matches_the_mujoco_reference_on_both_paths():
     assert np.abs(rms["path", True] - rms["physics", True]).max() < 1e-4, rms
     assert np.abs(rms["path", True] - rms["path", False]).max() < 2e-5, rms  # float64 numpy vs float32 torch
     actions = len(cmd15)
-    for numpy_path in (True, False):  # a plan per action; re-plans off the path are rare in free motion
-        assert actions - 1 <= plans["path", numpy_path] <= 1.1 * actions, (plans, actions)
+    for numpy_path in (True, False):  # a plan per action; re-plans off the path (here: torque saturation) are rare
+        assert actions - 1 <= plans["path", numpy_path] <= 1.2 * actions, (plans, actions)

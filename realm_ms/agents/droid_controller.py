@@ -24,6 +24,15 @@ benchmark steps PhysX at 120 Hz, where an explicit damping torque on the light w
   inertia): 16-32 mrad RMS off the 1 kHz reference on 10 s excitation logs.
 - ``"explicit"``: the law as is, stable only at >= ~1 kHz.
 
+Model terms (``DroidControlConfig.model_rate``). The exact step needs J, M, C and g at every physics
+step. ``"path"`` (default) predicts the closed loop's states over the next action's physics steps and
+evaluates the model at all of them in one batched call (a model evaluation is ~150 tiny array ops,
+so 8 configurations cost about what one does); each step then uses the terms of its predicted state,
+gravity corrected to first order for the measured one, and a row re-plans when its target changes or
+its arm leaves the path by more than ``path_tolerance`` (contact, saturation). Same accuracy as
+``"physics"`` (terms at the measured state every step) against the MuJoCo reference; on CPU with few
+envs the numpy path folds each planned step into one affine map (``_affine_step_numpy``).
+
 ``DroidArmDriver`` is the backend-free core (batched torch); ``DroidJointImpedanceController`` binds
 it to a ManiSkill articulation (physx_cpu and physx_cuda). The sysid replay simulator binds the same
 driver to its own articulations, so an identified model is the model the benchmark runs.
@@ -508,13 +517,16 @@ class DroidArmDriver:
         phi[:, n:, n:] = eye - t * d_
         return np.linalg.matrix_power(phi, ticks)
 
-    def _plan_path_numpy(self, q, qd, q_t, ext, gains: tuple, dt: float, steps: int, eps: float = 1e-3) -> dict:
+    def _plan_path_numpy(self, q, qd, q_t, ext, gains: tuple, dt: float, steps: int, predictor=None, eps: float = 1e-3) -> dict:
         """``_plan_path`` in numpy; the gravity Jacobian's 2n configurations join the path's batch."""
         k, cfg = self._np, self.config
         npm, arm, (b, n) = k["model"], k["arm"], q.shape
-        frames = npm.link_frames(q)
-        kp, kd = self._stiffness_damping_numpy(npm.jacobian(frames), gains)
-        phi = self._transition_numpy(np.linalg.inv(npm.mass_matrix(frames) + arm), kp, kd, dt)
+        if predictor is None:
+            frames = npm.link_frames(q)
+            kp, kd = self._stiffness_damping_numpy(npm.jacobian(frames), gains)
+            phi = self._transition_numpy(np.linalg.inv(npm.mass_matrix(frames) + arm), kp, kd, dt)
+        else:
+            phi, kp = predictor
         e_star = np.linalg.solve(kp, ext[..., None])[..., 0]
         x = np.concatenate([q - q_t - e_star, qd], 1)[..., None]
         xs = [x]
@@ -546,7 +558,7 @@ class DroidArmDriver:
             bias = np.zeros((m, n))
         phi = self._transition_numpy(minv, kp, kd, dt)
         affine, const = self._affine_step_numpy(kp, kd, mass, phi, bias, np.repeat(dg, steps, 0), qs[:m], qs[:m], dt)
-        terms = dict(bias=bias, mass=mass, minv=minv, kp=kp, kd=kd, affine=affine, const=const)
+        terms = dict(bias=bias, mass=mass, minv=minv, kp=kp, kd=kd, phi=phi, affine=affine, const=const)
         plan = {key: v.reshape(b, steps, *v.shape[1:]) for key, v in terms.items()}
         plan.update(q=q_path, dg=dg)
         return plan
@@ -567,11 +579,14 @@ class DroidArmDriver:
         if full or rows is not None:
             c, q_t = self._np, self.q_target.numpy()
             gains = (c["kq"], c["kqd"], c["kx"], c["kxd"])
+            j = min(k, steps - 1)
+            pred = None if p is None or self._plan_np_dt != dt else (p["phi"][:, j], p["kp"][:, j])
             if full:
-                self._plan_np, self._plan_np_dt, k = self._plan_path_numpy(q, qd, q_t, ext, gains, dt, steps), dt, 0
-                p = self._plan_np
+                self._plan_np = self._plan_path_numpy(q, qd, q_t, ext, gains, dt, steps, pred)
+                self._plan_np_dt, k, p = dt, 0, self._plan_np
             else:
-                new = self._plan_path_numpy(q[rows], qd[rows], q_t[rows], ext[rows], tuple(g[rows] for g in gains), dt, steps - k)
+                new = self._plan_path_numpy(q[rows], qd[rows], q_t[rows], ext[rows], tuple(g[rows] for g in gains), dt, steps - k,
+                                            tuple(x[rows] for x in pred))
                 for key, v in new.items():
                     if key == "dg":
                         p[key][rows] = v
@@ -632,19 +647,24 @@ class DroidArmDriver:
     # ------------------------------------------------------------------ model_rate="path"
     _STEP_TERMS = ("q", "bias", "mass", "minv", "phi", "kp", "kd")  # (B, steps, ...) in a plan; "target", "dg" per row
 
-    def _plan_path(self, q, qd, q_t, gains: TorchGains, extra_inertia, ext, dt: float, steps: int) -> dict:
+    def _plan_path(self, q, qd, q_t, gains: TorchGains, extra_inertia, ext, dt: float, steps: int, predictor=None) -> dict:
         """Model terms for the next ``steps`` physics steps, each at the state the closed loop is
         predicted to reach at that step: one batched evaluation instead of one per step.
 
         The path is predicted with the terms at q held (the model moves little over a control step,
         and the prediction only decides where the terms are taken); the terms along it are then the
-        model's own. ``dg`` (dg/dq at q) corrects gravity to first order for the measured q."""
+        model's own. ``dg`` (dg/dq at q) corrects gravity to first order for the measured q.
+        ``predictor``: (Phi, Kp) from the previous plan at the state it predicted for now (saves a
+        model evaluation; the prediction only decides where the terms are taken)."""
         m, (b, n) = self.model, q.shape
         arm = torch.diag_embed(self.armature)
-        frames = m.link_frames(q)
-        kp, kd = self._stiffness_damping(m.jacobian(q, frames), gains)
-        mass = m.mass_matrix(q, frames) + arm + (0.0 if extra_inertia is None else extra_inertia)
-        phi = self._transition(torch.linalg.inv(mass), kp, kd, dt)
+        if predictor is None:
+            frames = m.link_frames(q)
+            kp, kd = self._stiffness_damping(m.jacobian(q, frames), gains)
+            mass = m.mass_matrix(q, frames) + arm + (0.0 if extra_inertia is None else extra_inertia)
+            phi = self._transition(torch.linalg.inv(mass), kp, kd, dt)
+        else:
+            phi, kp = predictor
         e_star = torch.linalg.solve(kp, ext[..., None])[..., 0]  # a constant load shifts the equilibrium
         x = torch.cat([q - q_t - e_star, qd], 1)[..., None]
         xs = [x]
@@ -679,12 +699,15 @@ class DroidArmDriver:
                 full = len(rows) == q_m.shape[0]
         if full or rows is not None:
             extra = self.actuation.plant_inertia(state) if state is not None else None
+            j = min(k, steps - 1)  # the previous plan's step nearest to now predicts the new path
+            pred = None if p is None or self._plan_dt != dt else (p["phi"][:, j], p["kp"][:, j])
             if full:
-                self._plan, self._plan_dt, k = self._plan_path(q_m, qd_m, q_t, gains, extra, self.plant_prev, dt, steps), dt, 0
-                p = self._plan
+                self._plan = self._plan_path(q_m, qd_m, q_t, gains, extra, self.plant_prev, dt, steps, pred)
+                self._plan_dt, k, p = dt, 0, self._plan
             else:
                 new = self._plan_path(q_m[rows], qd_m[rows], q_t[rows], gains.map(lambda x: x[rows]),
-                                      None if extra is None else extra[rows], self.plant_prev[rows], dt, steps - k)
+                                      None if extra is None else extra[rows], self.plant_prev[rows], dt, steps - k,
+                                      tuple(x[rows] for x in pred))
                 for key, v in new.items():
                     if key in self._STEP_TERMS:
                         p[key][rows, k:] = v
