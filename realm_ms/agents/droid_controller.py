@@ -395,30 +395,32 @@ class DroidArmDriver:
             kp, kd, bias, mass, minv, affine, const, dg, q_ref = self._terms_np
             terms = lambda: (kp, kd, mass, minv, bias + (dg @ (q - q_ref)[..., None])[..., 0])  # noqa: E731
         y = (affine @ z)[..., 0] + const
-        # rows: law torque at the step's start and end (vs the limits), distance to the planned path
-        flags = np.abs(y[:, : 3 * n]) > k["bounds"]
-        if flags.any():
-            if cfg.follows_path and flags[:, 2 * n :].any():  # off the path: re-plan those rows
+        # rows: law torque at the step's start and end, distance to the planned path, motor torque;
+        # one bound check for all four (the common case: none is exceeded)
+        tau = y[:, 3 * n : 4 * n]
+        clamped = tau
+        if (np.abs(y[:, : 4 * n]) > k["bounds"]).any():
+            off = (np.abs(y[:, 2 * n : 3 * n]) > k["bounds"][2 * n : 3 * n]).any(-1)
+            if cfg.follows_path and off.any():  # off the path: re-plan those rows
                 self._plan_np_k -= 1
-                affine, const, terms = self._path_step_numpy(q, qd, ext, dt, off=flags[:, 2 * n :].any(-1))
+                affine, const, terms = self._path_step_numpy(q, qd, ext, dt, off=off)
                 y = (affine @ z)[..., 0] + const
+                tau = y[:, 3 * n : 4 * n]
             sat = (np.abs(y[:, : 2 * n]) > k["bounds"][: 2 * n]).any(-1)
             if sat.any():  # the law saturates within the step: its ticks with the clipped torque
                 self._saturated_ticks_numpy(y, sat, err, qd, qd_held, ext, terms(), dt)
-        tau = y[:, 3 * n : 4 * n]
-        lim = k["lim"]
-        clamped = np.minimum(np.maximum(tau, -lim), lim)
-        held = (np.abs(clamped - tau) < 1e-4).all(-1)
+            lim = k["lim"]
+            clamped = np.minimum(np.maximum(tau, -lim), lim)
+            held = (np.abs(clamped - tau) < 1e-4).all(-1)
+            y[~held, 4 * n :] = 0.0  # where the torque was limited the prediction does not hold: no correction
         friction = k["neg_fric"] * np.tanh(qd * k["inv_fric_v"])
         cap = k["inertia_lb_dt"] * np.abs(qd)
         friction = np.minimum(np.maximum(friction, -cap), cap)
         state[:, :n] = y[:, 4 * n :]
-        if not held.all():  # where the torque was limited the prediction does not hold: no correction
-            state[~held, :n] = 0.0
         state[:, n : 2 * n] = clamped
         state[:, 2 * n : 3 * n] = out = clamped + friction
         state[:, 3 * n :] = friction
-        self.time += dt
+        k["time"] += dt
         return out
 
     def _saturated_ticks_numpy(self, y, sat, err, qd, qd_held, ext, terms: tuple, dt: float) -> None:
@@ -475,7 +477,7 @@ class DroidArmDriver:
         if k.get("dt") != dt:  # the friction limiter's impulse bound per step
             k["dt"], k["inertia_lb_dt"] = dt, self.inertia_lower_bound.double().numpy() / dt
             lim = k["lim"]
-            k["bounds"] = np.concatenate([lim, lim, np.full_like(lim, self.config.path_tolerance)])
+            k["bounds"] = np.concatenate([lim, lim, np.full_like(lim, self.config.path_tolerance), lim])
         if k.get("views") is None or k["views"][0] is not self.velocity_correction or k["views"][3] is not self.plant_prev:
             # one float32 buffer behind the four state tensors (reset() writes them in place)
             names = ("velocity_correction", "motor_torque", "applied_torque", "plant_prev")
@@ -484,6 +486,8 @@ class DroidArmDriver:
             for name, v in zip(names, views):
                 setattr(self, name, v)
             k["views"], k["state"] = views, buf.numpy()
+        if k.get("time_of") is not self.time:
+            k["time_of"], k["time"] = self.time, self.time.numpy()  # advanced in place (reset() zeroes it in place)
         return self._np
 
     def _terms_numpy(self, q, qd, gains: tuple, dt: float) -> tuple:
