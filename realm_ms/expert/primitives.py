@@ -206,6 +206,33 @@ def width_across(extents, r: np.ndarray, yaw: float) -> float:
     return float(extents[0] if along_x else extents[1])
 
 
+UPRIGHT_COS = 0.9  # object z axis within ~25 deg of vertical: standing as placed
+
+
+def tipped_grasp(pos: np.ndarray, r: np.ndarray, ext, ref: float = DEFAULT_YAW) -> tuple[np.ndarray, float, float, float]:
+    """Grasp of a toppled object from its rotated bounding box: (x, y, bottom z) of the box centre's
+    column, closing yaw across the box's narrower horizontal side, the width there, top z."""
+    ext = np.asarray(ext, float)
+    c = pos + r @ np.array([0.0, 0.0, ext[2] / 2])
+    half_z = float(np.abs(r[2]) @ ext) / 2
+
+    def along(d) -> float:  # the box's extent along the direction d
+        return float(np.abs(np.asarray(d) @ r) @ ext)
+
+    k = int(np.argmax(np.linalg.norm(r[:2], axis=0) * ext))  # the local axis lying most along the table
+    u = np.array([r[0, k], r[1, k], 0.0])
+    u /= max(np.linalg.norm(u), 1e-9)
+    v = np.array([-u[1], u[0], 0.0])
+    wu, wv = along(u), along(v)
+    yaws = [math.atan2(u[1], u[0]), math.atan2(v[1], v[0])]
+    if abs(wu - wv) < 0.15 * max(wu, wv):
+        y = nearest_yaw(yaws, ref)
+    else:
+        y = nearest_yaw([yaws[0] if wu < wv else yaws[1]], ref)
+    width = along([math.cos(y), math.sin(y), 0.0])
+    return np.array([c[0], c[1], c[2] - half_z]), y, width, c[2] + half_z
+
+
 def object_geometry(ctx: "Ctx", obj) -> tuple:
     """(catalog spec, per-axis scale, extents) of ``obj`` in this env: perturbations give each
     sub-env its own model and size (SB-NOUN, VB-MOBJ)."""
@@ -288,9 +315,13 @@ def grasp(ctx: Ctx, obj, tries: int = 3, clearance: float = 0.10, point=None, ya
 
     def target() -> tuple[np.ndarray, float, bool]:
         pos, r = ctx.obj_pose(obj)
-        y = yaw(ctx) if yaw is not None else grasp_yaw_for(ext, r)
         if point is not None:
-            return np.asarray(point(ctx), float), y, False
+            return np.asarray(point(ctx), float), (yaw(ctx) if yaw is not None else grasp_yaw_for(ext, r)), False
+        if r[2, 2] < UPRIGHT_COS:  # toppled (a tall, round-bottomed object rolls over): its rotated box
+            g, y_box, width, top = tipped_grasp(pos, r, ext)
+            y = yaw(ctx) if yaw is not None else y_box
+            return np.array([g[0], g[1], grasp_height(g[2], top, width)]), y, top - g[2] < FLAT
+        y = yaw(ctx) if yaw is not None else grasp_yaw_for(ext, r)
         sl = grasp_slice(asset, scale, ext)
         w = pos + r @ np.array([sl.point[0], sl.point[1], 0.0])
         width = sl.width if sl.width is not None else width_across(ext, r, y)
