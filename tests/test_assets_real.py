@@ -120,3 +120,31 @@ def test_stale_shipped_size_falls_back_and_says_how_to_rebuild(monkeypatch):
 def test_unknown_real_object_is_a_clear_error():
     with pytest.raises(KeyError, match="known"):
         get_object_spec("real/unicorn")
+
+
+def test_real_objects_placed_as_tasks_place_them_stay_put():
+    """Tasks set objects down upright, 2 mm above the table (origin = bottom centre): each real mesh
+    must then rest there, neither tipping over, rolling away nor sinking."""
+    import sapien
+
+    from realm_ms.assets import build_actor, make_cpu_scene
+
+    scene = make_cpu_scene(ground=False)
+    table = scene.create_actor_builder()
+    table.add_box_collision(half_size=[4, 4, 0.02], material=sapien.physx.PhysxMaterial(0.8, 0.8, 0))
+    table.initial_pose = sapien.Pose(p=[0, 0, 0.78])
+    table.build_static(name="table")
+    top = 0.80
+    placed = []
+    for i, name in enumerate(sorted(ro.REAL_OBJECTS)):
+        spec = get_object_spec(ro.PREFIX + name)
+        p = np.array([-2.0 + 0.6 * i, 0.0, top + 0.002])
+        placed.append((name, build_actor(scene, spec, name, pose=sapien.Pose(p=p)), p))
+    for _ in range(200):  # 2 s at 100 Hz
+        scene.px.step()
+    for name, actor, p0 in placed:
+        pose = actor._objs[0].pose
+        up = pose.to_transformation_matrix()[:3, 2]
+        assert up[2] > 0.98, f"{name} tipped over"
+        assert np.linalg.norm(pose.p[:2] - p0[:2]) < 0.01, f"{name} moved {np.linalg.norm(pose.p[:2] - p0[:2]):.3f} m"
+        assert -0.003 < pose.p[2] - top < 0.003, f"{name} rests at {pose.p[2] - top:+.4f} m"

