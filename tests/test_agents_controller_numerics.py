@@ -170,3 +170,43 @@ def test_path_rate_matches_the_mujoco_reference_on_both_paths():
     actions = len(cmd15)
     for numpy_path in (True, False):  # a plan per action; re-plans off the path (here: torque saturation) are rare
         assert actions - 1 <= plans["path", numpy_path] <= 1.2 * actions, (plans, actions)
+
+
+def test_path_plans_agree_across_backends_with_partial_replans():
+    """Several envs, targets changing in some rows only and one arm pushed off its path: the batched
+    torch plan and the numpy plan re-plan the same rows and give the same torques."""
+    from realm_ms.agents.arm_model import NumpyArmModel
+
+    model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
+    npm = NumpyArmModel(model)
+    b, dt = 3, 1 / 120
+    q0 = np.repeat(np.array([HOME]), b, 0)
+    outs = []
+    for numpy_path in (True, False):
+        drv = DroidArmDriver(model, DroidControlConfig(joint_physics="realm"), b)
+        drv.allow_numpy = numpy_path
+        drv.reset(torch.as_tensor(q0, dtype=torch.float32))
+        arm = np.diag(drv.armature.double().numpy())
+        q, qd, res, plans = q0.copy(), np.zeros_like(q0), [], [0]
+        plan = drv._plan_path_numpy if numpy_path else drv._plan_path
+
+        def counted(*a, _plan=plan):
+            plans[0] += 1
+            return _plan(*a)
+
+        setattr(drv, "_plan_path_numpy" if numpy_path else "_plan_path", counted)
+        target = q0.copy()
+        for k in range(48):
+            if k % 8 == 0:
+                target[k // 8 % b] += 0.05  # one row's target changes per action
+                drv.set_target(torch.as_tensor(target, dtype=torch.float32))
+            tau = drv.torque(torch.as_tensor(q, dtype=torch.float32), torch.as_tensor(qd, dtype=torch.float32), dt).double().numpy()
+            bias, mass = npm.bias_and_mass(npm.link_frames(q), qd)
+            qd = qd + dt * np.linalg.solve(mass + arm, (tau - bias)[..., None])[..., 0]
+            if k == 20:
+                qd[1] += 0.5  # a push: row 1 leaves its predicted path
+            q = q + dt * qd
+            res.append(tau)
+        outs.append(np.stack(res))
+        assert plans[0] > 48 // 8, plans  # partial re-plans happened
+    assert np.abs(outs[0] - outs[1]).max() < 5e-3, np.abs(outs[0] - outs[1]).max()
