@@ -13,8 +13,8 @@ Public API::
         ObjectSpec, ObjectQuery, TASK_OBJECTS,
     )
 
-``real/<noun>`` ids (``real/apple``, ``real/bowl``) are real textured meshes from default-installed
-packages, fitted to real sizes (``realm_ms.assets.real_objects``; procedural fallback when missing).
+``real/<noun>`` ids (``real/apple``, ``real/mug``, ...) are real meshes shipped as package data,
+fitted to real sizes (``realm_ms.assets.real_objects``; procedural fallback when missing).
 Procedural ids are ``proc/<category>/<seed>[?color=<name>&size=<metres>]``; ``size`` is the largest
 extent. Objects are upright with the origin at the bottom centre, so a pose at table height rests
 them on the table. ``TASK_OBJECTS`` maps REALM task nouns to ids (e.g. ``"green cube"``).
