@@ -215,7 +215,6 @@ class DroidArmDriver:
         self._terms = self._terms_np = None  # cached model terms for model_rate="control" (torch, numpy path)
         # model_rate="path": terms along the predicted path, (B, path_steps, ...); torch and numpy path
         self._plan = self._plan_np = self._plan_dt = self._plan_np_dt = None
-        self._plan_k = self._plan_np_k = 0  # physics steps of the plan used so far
         self._retarget = None  # (B,) bool: rows whose target changed since the numpy plan was made
         self.path_steps = config.path_steps
         self.time = torch.zeros(num_envs, device=self.device)
@@ -402,7 +401,7 @@ class DroidArmDriver:
         if (np.abs(y[:, : 4 * n]) > k["bounds"]).any():
             off = (np.abs(y[:, 2 * n : 3 * n]) > k["bounds"][2 * n : 3 * n]).any(-1)
             if cfg.follows_path and off.any():  # off the path: re-plan those rows
-                self._plan_np_k -= 1
+                self._plan_np["k"] -= 1
                 affine, const, terms = self._path_step_numpy(q, qd, ext, dt, off=off)
                 y = (affine @ z)[..., 0] + const
                 tau = y[:, 3 * n : 4 * n]
@@ -564,42 +563,43 @@ class DroidArmDriver:
         affine, const = self._affine_step_numpy(kp, kd, mass, phi, bias, np.repeat(dg, steps, 0), qs[:m], qs[:m], dt)
         terms = dict(bias=bias, mass=mass, minv=minv, kp=kp, kd=kd, phi=phi, affine=affine, const=const)
         plan = {key: v.reshape(b, steps, *v.shape[1:]) for key, v in terms.items()}
-        plan.update(q=q_path, dg=dg)
+        plan.update(q=q_path, dg=dg, k=np.zeros(b, dtype=np.int64))
         return plan
 
     def _path_step_numpy(self, q, qd, ext, dt: float, off: np.ndarray | None = None) -> tuple:
-        """``_path_step`` in numpy: this physics step's affine map and, for the saturated case, its
-        (Kp, Kd, M, M^-1, feed-forward). ``off``: rows found off the path (re-planned)."""
-        p, k, steps = self._plan_np, self._plan_np_k, self.path_steps
-        full, rows = p is None or self._plan_np_dt != dt or k >= steps, None
+        """``_path_step`` in numpy: this physics step's affine map and, for the saturated case, a
+        function giving its (Kp, Kd, M, M^-1, feed-forward). ``off``: rows found off the path."""
+        p, steps, b = self._plan_np, self.path_steps, q.shape[0]
+        r = np.arange(b)
+        full, rows, pred = p is None or self._plan_np_dt != dt, None, None
         if not full:
-            need = off
+            j = np.minimum(p["k"], steps - 1)
+            need = p["k"] >= steps
+            if off is not None:
+                need = need | off
             if self._retarget is not None:
-                need = self._retarget.numpy() if need is None else need | self._retarget.numpy()
-            if need is not None and need.any():
+                need = need | self._retarget.numpy()
+            if need.any():
                 rows = np.nonzero(need)[0]
-                full = len(rows) == q.shape[0]
+                full = len(rows) == b
+                pred = (p["phi"][r, j], p["kp"][r, j])
         self._retarget = None
         if full or rows is not None:
             c, q_t = self._np, self.q_target.numpy()
             gains = (c["kq"], c["kqd"], c["kx"], c["kxd"])
-            j = min(k, steps - 1)
-            pred = None if p is None or self._plan_np_dt != dt else (p["phi"][:, j], p["kp"][:, j])
             if full:
-                self._plan_np = self._plan_path_numpy(q, qd, q_t, ext, gains, dt, steps, pred)
-                self._plan_np_dt, k, p = dt, 0, self._plan_np
+                self._plan_np, self._plan_np_dt = self._plan_path_numpy(q, qd, q_t, ext, gains, dt, steps, pred), dt
+                p = self._plan_np
             else:
-                new = self._plan_path_numpy(q[rows], qd[rows], q_t[rows], ext[rows], tuple(g[rows] for g in gains), dt, steps - k,
+                new = self._plan_path_numpy(q[rows], qd[rows], q_t[rows], ext[rows], tuple(g[rows] for g in gains), dt, steps,
                                             tuple(x[rows] for x in pred))
                 for key, v in new.items():
-                    if key == "dg":
-                        p[key][rows] = v
-                    else:
-                        p[key][rows, k:] = v
-        self._plan_np_k = k + 1
-        terms = lambda: (p["kp"][:, k], p["kd"][:, k], p["mass"][:, k], p["minv"][:, k],  # noqa: E731
-                         p["bias"][:, k] + (p["dg"] @ (q - p["q"][:, k])[..., None])[..., 0])
-        return p["affine"][:, k], p["const"][:, k], terms
+                    p[key][rows] = v
+        k = p["k"]
+        p["k"] = k + 1
+        terms = lambda: (p["kp"][r, k], p["kd"][r, k], p["mass"][r, k], p["minv"][r, k],  # noqa: E731
+                         p["bias"][r, k] + (p["dg"] @ (q - p["q"][r, k])[..., None])[..., 0])
+        return p["affine"][r, k], p["const"][r, k], terms
 
     def _gravity_jacobian_numpy(self, q: np.ndarray, eps: float = 1e-3) -> np.ndarray:
         """``_gravity_jacobian`` in numpy: d g / d q (B, n, n) by central differences."""
@@ -649,7 +649,7 @@ class DroidArmDriver:
         return torch.linalg.matrix_power(phi, ticks)
 
     # ------------------------------------------------------------------ model_rate="path"
-    _STEP_TERMS = ("q", "bias", "mass", "minv", "phi", "kp", "kd")  # (B, steps, ...) in a plan; "target", "dg" per row
+    # a plan: "q", "bias", "mass", "minv", "phi", "kp", "kd" (B, steps, ...); "target", "dg", "k" (step index) per row
 
     def _plan_path(self, q, qd, q_t, gains: TorchGains, extra_inertia, ext, dt: float, steps: int, predictor=None) -> dict:
         """Model terms for the next ``steps`` physics steps, each at the state the closed loop is
@@ -686,41 +686,47 @@ class DroidArmDriver:
         minv = torch.linalg.inv(mass)
         terms = dict(bias=self._bias(qs, qds, frames), mass=mass, minv=minv, phi=self._transition(minv, kp, kd, dt), kp=kp, kd=kd)
         plan = {key: v.reshape(b, steps, *v.shape[1:]) for key, v in terms.items()}
-        plan.update(q=q_path, target=q_t.clone(), dg=self._gravity_jacobian(q))
+        plan.update(q=q_path, target=q_t.clone(), dg=self._gravity_jacobian(q), k=torch.zeros(b, dtype=torch.long, device=q.device))
         return plan
 
     def _path_step(self, q_m, qd_m, q_t, gains: TorchGains, state, dt: float) -> tuple[tuple, torch.Tensor]:
-        """(step matrices, feed-forward) for this physics step from the plan. A used-up plan is renewed
-        for all rows; rows whose target changed or whose arm left the path by > ``path_tolerance``
-        (contact, saturation, latency) get a new plan for the rest of the horizon."""
-        p, k, steps = self._plan, self._plan_k, self.path_steps
-        full, rows = p is None or self._plan_dt != dt or k >= steps, None
+        """(step matrices, feed-forward) for this physics step from the plan. Each row has its own
+        step index and gets a new plan when its plan is used up, its target changed or its arm left
+        the path by > ``path_tolerance`` (contact, saturation, latency): a row's plans depend on its
+        own history only, so batched rows equal single runs."""
+        p, steps, b = self._plan, self.path_steps, q_m.shape[0]
+        r = self._rows(b, q_m.device)
+        full, rows, pred = p is None or self._plan_dt != dt, None, None
         if not full:
-            off = (q_m - p["q"][:, k]).abs().amax(-1)
-            need = (q_t != p["target"]).any(-1) | (off > self.config.path_tolerance)
+            j = p["k"].clamp(max=steps - 1)
+            off = (q_m - p["q"][r, j]).abs().amax(-1)
+            need = (p["k"] >= steps) | (q_t != p["target"]).any(-1) | (off > self.config.path_tolerance)
             if bool(need.any()):
                 rows = torch.nonzero(need)[:, 0]
-                full = len(rows) == q_m.shape[0]
+                full = len(rows) == b
+                # the previous plan's step nearest to now predicts the new path
+                pred = (p["phi"][r, j], p["kp"][r, j])
         if full or rows is not None:
             extra = self.actuation.plant_inertia(state) if state is not None else None
-            j = min(k, steps - 1)  # the previous plan's step nearest to now predicts the new path
-            pred = None if p is None or self._plan_dt != dt else (p["phi"][:, j], p["kp"][:, j])
             if full:
-                self._plan = self._plan_path(q_m, qd_m, q_t, gains, extra, self.plant_prev, dt, steps, pred)
-                self._plan_dt, k, p = dt, 0, self._plan
+                self._plan, self._plan_dt = self._plan_path(q_m, qd_m, q_t, gains, extra, self.plant_prev, dt, steps, pred), dt
+                p = self._plan
             else:
                 new = self._plan_path(q_m[rows], qd_m[rows], q_t[rows], gains.map(lambda x: x[rows]),
-                                      None if extra is None else extra[rows], self.plant_prev[rows], dt, steps - k,
+                                      None if extra is None else extra[rows], self.plant_prev[rows], dt, steps,
                                       tuple(x[rows] for x in pred))
                 for key, v in new.items():
-                    if key in self._STEP_TERMS:
-                        p[key][rows, k:] = v
-                    else:
-                        p[key][rows] = v
-        self._plan_k = k + 1
-        mass, minv, phi, kp, kd = (p[key][:, k] for key in ("mass", "minv", "phi", "kp", "kd"))
-        bias = p["bias"][:, k] + (p["dg"] @ (q_m - p["q"][:, k])[..., None])[..., 0]
+                    p[key][rows] = v
+        k = p["k"]
+        mass, minv, phi, kp, kd = (p[key][r, k] for key in ("mass", "minv", "phi", "kp", "kd"))
+        bias = p["bias"][r, k] + (p["dg"] @ (q_m - p["q"][r, k])[..., None])[..., 0]
+        p["k"] = k + 1
         return (mass, minv, phi, dt, kp, kd, self._ticks(dt)), bias
+
+    def _rows(self, b: int, device) -> torch.Tensor:
+        if getattr(self, "_row_index", None) is None or len(self._row_index) != b:
+            self._row_index = torch.arange(b, device=device)
+        return self._row_index
 
     def _exact_torque(self, err: torch.Tensor, qd: torch.Tensor, qd_held: torch.Tensor, step: tuple, bias: torch.Tensor):
         """Motor torque (without feed-forward) that moves the plant to the closed loop's position after
