@@ -97,7 +97,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20, help="episodes per (task, perturbation), seeds 0..N-1")
     ap.add_argument("--tasks", nargs="*", default=None, help="env ids (default: every REALM task)")
-    ap.add_argument("--perturbation", default="Default", help="a perturbation name or id, or 'all' (Default + the 15)")
+    ap.add_argument("--perturbation", default="Default", help="a perturbation name or id, a comma-separated list of them, or 'all' (Default + the 15)")
     ap.add_argument("--workers", type=int, default=None, help="worker processes (default: CPU cores)")
     ap.add_argument("--max-steps", type=int, default=800)
     ap.add_argument("--threshold", type=float, default=0.8, help="success rate a cell must reach (listed when below)")
@@ -119,7 +119,7 @@ def main(argv=None) -> int:
         unknown = [t for t in tasks if t not in TASKS]
         if unknown:
             raise UserError(f"unknown task(s) {unknown}; known: {sorted(TASKS)}")
-        perts = available_perturbations() if args.perturbation == "all" else [canonical_perturbation(args.perturbation)]
+        perts = available_perturbations() if args.perturbation == "all" else [canonical_perturbation(p.strip()) for p in args.perturbation.split(",")]
         proto = PRESETS["realm"].with_overrides(episodes=args.seeds, seed=0, max_steps=args.max_steps)
         evaluate("expert", tasks, perts, proto, out, workers=args.workers, quiet=False)
     except (UserError, ValueError) as e:
