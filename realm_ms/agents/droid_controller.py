@@ -339,12 +339,14 @@ class DroidArmDriver:
         else:
             tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
         clamped = torch.clamp(tau, self._neg_effort_limits, self.effort_limits)
-        if act:
-            clamped = act.actuator(clamped, state)
         if exact:
-            # where the torque was limited the prediction does not hold: no correction there
+            # where the law's torque was limited the prediction does not hold: no correction there
+            # (tested before the actuator stages, whose additions enter the next step as plant torque)
             held = ((clamped - tau).abs() < 1e-4).all(-1, keepdim=True)
             self.velocity_correction = torch.where(held, v_end - v_avg, 0.0)
+        law = clamped
+        if act:
+            clamped = act.actuator(clamped, state)
         tau = self.motor_torque = clamped
         # joint friction is physics, not command: it acts on the true velocity
         friction = self._neg_friction * torch.tanh(qd / self.joint_physics.friction_velocity)
@@ -355,7 +357,7 @@ class DroidArmDriver:
                 tau = tau + plant
         self.applied_torque = tau
         if exact:
-            self.plant_prev = tau - self.motor_torque
+            self.plant_prev = tau - law  # all but the law's own torque (actuator stages included)
         self.time = self.time + dt
         # the implicit drive will apply about -d*qd; pre-compensate so the total matches the law
         return tau + self.implicit_damping * qd if self.config.integrator == "implicit_damping" else tau
