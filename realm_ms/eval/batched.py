@@ -29,13 +29,12 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
-from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, jsonable, make_env
+from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, episode_record, jsonable, make_env, unsupported_record
 from realm_ms.eval.workers import Backend
 
 # keys of ``info["perturbation"]`` that hold one entry per sub-env (a slot's record keeps its row)
@@ -355,47 +354,12 @@ class BatchedBackend(Backend):
         return rec
 
     # ------------------------------------------------------------------ records (EpisodeRunner's schema)
-    def _base(self, ep: SlotEpisode) -> dict:
-        k = ep.key
-        return dict(task=k.task, perturbation=k.perturbation, seed=k.seed, policy=self.cfg.policy)
-
     def _unsupported_record(self, ep: SlotEpisode) -> dict:
-        return self._base(ep) | dict(status="unsupported", error=ep.unsupported, success=False, progression=0.0, steps=0)
+        return unsupported_record(self.cfg, ep.key, ep.unsupported)
 
     def _record(self, g: Group, ep: SlotEpisode, status: str, stalled: str, error: str | None = None) -> dict:
-        success = ep.success
-        rec = self._base(ep) | dict(
-            status=status,
-            perturbation_params=ep.perturbation_info,
-            instruction=ep.instruction,
-            skill=g.env.unwrapped.task_spec.skill,
-            success=success,
-            progression=round(ep.best, 6),
-            progression_timestamps=ep.rises,
-            stages=ep.latched,
-            stalled_stage=stalled,
-            steps=ep.steps,
-            max_steps=self.cfg.max_steps,
-            replan_every=self.cfg.replan_every,
-            wall_s=round(time.perf_counter() - ep.t0, 3),
-            quality=ep.quality.summary() if ep.quality is not None else None,
-        )
-        if error:
-            rec["error"] = error
-        if ep.frames and (self.cfg.videos == "all" or (self.cfg.videos == "failures" and not success)):
-            rec["video"] = self._write_video(ep)
-        ep.frames = []
-        return jsonable(rec)
-
-    def _write_video(self, ep: SlotEpisode) -> str:
-        import imageio.v2 as imageio
-
-        d = Path(self.cfg.videos_dir or "videos")
-        d.mkdir(parents=True, exist_ok=True)
-        k = ep.key
-        path = d / f"{k.task}__{k.perturbation}__{k.seed}.mp4"
-        imageio.mimwrite(path, ep.frames, fps=15, macro_block_size=8)
-        return str(path)
+        return episode_record(self.cfg, ep, status, skill=g.env.unwrapped.task_spec.skill, success=ep.success,
+                              stalled=stalled, error=error)
 
     def close(self) -> None:
         for g in self.groups:

@@ -217,48 +217,62 @@ class EpisodeRunner:
         return self._record("error", error)
 
     # ------------------------------------------------------------------ records
-    def _base(self) -> dict:
-        k = self.key
-        return dict(task=k.task, perturbation=k.perturbation, seed=k.seed, policy=self.cfg.policy)
-
     def _unsupported_record(self) -> dict:
-        return self._base() | dict(status="unsupported", error=self.unsupported, success=False, progression=0.0, steps=0)
+        return unsupported_record(self.cfg, self.key, self.unsupported)
 
     def _record(self, status: str, error: str | None = None) -> dict:
         u = self.env.unwrapped
-        success = bool(self.info["success"][0])
-        rec = self._base() | dict(
-            status=status,
-            perturbation_params=self.perturbation_info,
-            instruction=self.instruction,
-            skill=u.task_spec.skill,
-            success=success,
-            progression=round(self.best, 6),
-            progression_timestamps=self.rises,
-            stages=self.latched,
-            stalled_stage=u.stalled_stage()[0],
-            steps=self.steps,
-            max_steps=self.cfg.max_steps,
-            replan_every=self.cfg.replan_every,
-            wall_s=round(time.perf_counter() - self.t0, 3),
-            quality=self.quality.summary() if self.quality is not None else None,
-        )
-        if error:
-            rec["error"] = error
-        if self.frames and (self.cfg.videos == "all" or (self.cfg.videos == "failures" and not success)):
-            rec["video"] = self._write_video()
-        self.frames = []
-        return jsonable(rec)
+        return episode_record(self.cfg, self, status, skill=u.task_spec.skill, success=bool(self.info["success"][0]),
+                              stalled=u.stalled_stage()[0], error=error)
 
-    def _write_video(self) -> str | None:
-        import imageio.v2 as imageio
 
-        d = Path(self.cfg.videos_dir or "videos")
-        d.mkdir(parents=True, exist_ok=True)
-        k = self.key
-        path = d / f"{k.task}__{k.perturbation}__{k.seed}.mp4"
-        imageio.mimwrite(path, self.frames, fps=15, macro_block_size=8)
-        return str(path)
+# ---------------------------------------------------------------------------------------- records
+def _base_record(cfg: RunConfig, key: EpisodeKey) -> dict:
+    return dict(task=key.task, perturbation=key.perturbation, seed=key.seed, policy=cfg.policy)
+
+
+def unsupported_record(cfg: RunConfig, key: EpisodeKey, why: str) -> dict:
+    """The record of a cell the perturbation does not support (REALM: 9 of 160)."""
+    return _base_record(cfg, key) | dict(status="unsupported", error=why, success=False, progression=0.0, steps=0)
+
+
+def episode_record(cfg: RunConfig, ep, status: str, skill, success: bool, stalled: str, error: str | None = None) -> dict:
+    """One finished episode's record, the schema every backend writes. ``ep`` holds the episode's
+    bookkeeping (``key``, ``perturbation_info``, ``instruction``, ``best``, ``rises``, ``latched``,
+    ``steps``, ``t0``, ``quality``, ``frames``); its frames are written to a video as ``cfg.videos``
+    says, then dropped."""
+    rec = _base_record(cfg, ep.key) | dict(
+        status=status,
+        perturbation_params=ep.perturbation_info,
+        instruction=ep.instruction,
+        skill=skill,
+        success=success,
+        progression=round(ep.best, 6),
+        progression_timestamps=ep.rises,
+        stages=ep.latched,
+        stalled_stage=stalled,
+        steps=ep.steps,
+        max_steps=cfg.max_steps,
+        replan_every=cfg.replan_every,
+        wall_s=round(time.perf_counter() - ep.t0, 3),
+        quality=ep.quality.summary() if ep.quality is not None else None,
+    )
+    if error:
+        rec["error"] = error
+    if ep.frames and (cfg.videos == "all" or (cfg.videos == "failures" and not success)):
+        rec["video"] = _write_video(cfg, ep.key, ep.frames)
+    ep.frames = []
+    return jsonable(rec)
+
+
+def _write_video(cfg: RunConfig, key: EpisodeKey, frames: list[np.ndarray]) -> str:
+    import imageio.v2 as imageio
+
+    d = Path(cfg.videos_dir or "videos")
+    d.mkdir(parents=True, exist_ok=True)
+    path = d / f"{key.task}__{key.perturbation}__{key.seed}.mp4"
+    imageio.mimwrite(path, frames, fps=15, macro_block_size=8)
+    return str(path)
 
 
 # ---------------------------------------------------------------------------------------- driver
