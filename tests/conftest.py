@@ -18,3 +18,21 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+TABLE_TOP = 0.80  # height of the table top in ``table_scene``
+
+
+@pytest.fixture
+def table_scene():
+    """A CPU PhysX scene with a large static table whose top is at ``TABLE_TOP`` (friction 0.8)."""
+    import sapien
+
+    from realm_ms.assets import make_cpu_scene
+
+    scene = make_cpu_scene(ground=False)
+    table = scene.create_actor_builder()
+    table.add_box_collision(half_size=[4, 4, 0.02], material=sapien.physx.PhysxMaterial(0.8, 0.8, 0))
+    table.initial_pose = sapien.Pose(p=[0, 0, TABLE_TOP - 0.02])
+    table.build_static(name="table")
+    return scene

@@ -122,19 +122,14 @@ def test_unknown_real_object_is_a_clear_error():
         get_object_spec("real/unicorn")
 
 
-def test_real_objects_placed_as_tasks_place_them_stay_put():
+def test_real_objects_placed_as_tasks_place_them_stay_put(table_scene):
     """Tasks set objects down upright, 2 mm above the table (origin = bottom centre): each real mesh
     must then rest there, neither tipping over, rolling away nor sinking."""
     import sapien
 
-    from realm_ms.assets import build_actor, make_cpu_scene
+    from realm_ms.assets import build_actor
 
-    scene = make_cpu_scene(ground=False)
-    table = scene.create_actor_builder()
-    table.add_box_collision(half_size=[4, 4, 0.02], material=sapien.physx.PhysxMaterial(0.8, 0.8, 0))
-    table.initial_pose = sapien.Pose(p=[0, 0, 0.78])
-    table.build_static(name="table")
-    top = 0.80
+    scene, top = table_scene, 0.80
     placed = []
     for i, name in enumerate(sorted(ro.REAL_OBJECTS)):
         spec = get_object_spec(ro.PREFIX + name)

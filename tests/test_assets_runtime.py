@@ -106,7 +106,7 @@ def _world_min_z(actor, hull_pts: np.ndarray) -> float:
     return float((hull_pts @ R.T + pose.p)[:, 2].min())
 
 
-def test_random_objects_dropped_on_table_come_to_rest():
+def test_random_objects_dropped_on_table_come_to_rest(table_scene):
     """A random sample of catalog objects, dropped in random orientations onto a table top, settles:
     no explosion (stays near its drop point), no sinking (hull stays above the table), at rest."""
     import sapien
@@ -114,12 +114,7 @@ def test_random_objects_dropped_on_table_come_to_rest():
 
     rng = np.random.default_rng(1)
     specs = sample_objects(12, rng, distinct_categories=True) + [task_object_spec("bowl"), task_object_spec("wineglass")]
-    scene = make_cpu_scene(ground=False)
-    table = scene.create_actor_builder()
-    table.add_box_collision(half_size=[4, 4, 0.02], material=sapien.physx.PhysxMaterial(0.8, 0.8, 0))
-    table.initial_pose = sapien.Pose(p=[0, 0, 0.78])
-    table.build_static(name="table")
-    top = 0.80
+    scene, top = table_scene, 0.80
     actors = []
     for i, s in enumerate(specs):
         q = Rotation.random(random_state=int(rng.integers(1 << 30))).as_quat()  # x, y, z, w
