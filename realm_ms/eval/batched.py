@@ -35,7 +35,7 @@ import numpy as np
 from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
 from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, episode_record, jsonable, make_env, unsupported_record
-from realm_ms.eval.workers import Backend
+from realm_ms.eval.backend import Backend
 
 # keys of ``info["perturbation"]`` that hold one entry per sub-env (a slot's record keeps its row)
 PER_ENV_PERTURBATION_KEYS = ("episode_seed", "instruction", "skill", "params")

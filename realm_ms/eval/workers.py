@@ -11,7 +11,7 @@
   (``gpu_physx_status()``), the same code on CPU physics with one sub-env per env otherwise.
 - ``run_ray`` shards (task, perturbation) cells over a Ray cluster (``--ray-address``).
 
-All backends share one protocol (``Backend``): ``n_slots``, ``cell(slot)``, ``assign(free, queue)
+All backends share one protocol (``backend.Backend``): ``n_slots``, ``cell(slot)``, ``assign(free, queue)
 -> {slot: key}``, ``start({slot: key}) -> {slot: obs}``, ``policy_input(ready, pending)``,
 ``step({slot: actions | None}) -> {slot: (obs, record)}``, ``abort({slot: msg}) -> {slot: record}``,
 ``close()``. ``choose_backend`` maps ``--backend`` onto them through ``BACKENDS``.
@@ -27,41 +27,9 @@ from multiprocessing import shared_memory
 
 import numpy as np
 
-from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import EpisodeKey
+from realm_ms.eval.backend import Backend
 from realm_ms.eval.runner import EpisodeRunner, RunConfig
-
-
-class Backend:
-    """What ``run_plan`` drives; subclasses hold the slots' envs (protocol: module docstring)."""
-
-    n_slots: int
-
-    def cell(self, slot: int):
-        raise NotImplementedError
-
-    def assign(self, free: list[int], queue: list[EpisodeKey]) -> dict[int, EpisodeKey]:
-        """Pop the next key from ``queue`` for each free slot, preferring the slot's current
-        (task, perturbation) cell so its env is reused."""
-        starts = {}
-        for slot in free:
-            if not queue:
-                break
-            cell = self.cell(slot)
-            starts[slot] = queue.pop(next((i for i, k in enumerate(queue) if k.cell() == cell), 0))
-        return starts
-
-    def policy_input(self, ready: list[int], pending: dict[int, dict]) -> PolicyInput:
-        """The policy's batch from the latest observation of each ``ready`` slot."""
-        return PolicyInput(
-            state=np.stack([pending[s]["state"] for s in ready]),
-            instructions=[pending[s]["instruction"] for s in ready],
-            images={c: np.stack([pending[s]["images"][c] for s in ready]) for c in pending[ready[0]]["images"]},
-            slots=list(ready),
-        )
-
-    def close(self) -> None:
-        pass
 
 
 class InlineBackend(Backend):
