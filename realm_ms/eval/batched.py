@@ -34,7 +34,7 @@ import numpy as np
 
 from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
-from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, episode_record, jsonable, make_env, unsupported_record
+from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, advance_episode, episode_record, jsonable, make_env, unsupported_record
 from realm_ms.eval.backend import Backend
 
 # keys of ``info["perturbation"]`` that hold one entry per sub-env (a slot's record keeps its row)
@@ -319,15 +319,8 @@ class BatchedBackend(Backend):
                 if ep.record is not None:
                     continue
                 r = rows[s]
-                ep.steps += 1
                 ep.success = bool(flags[1, r] > 0.5)
-                prog = float(flags[0, r])
-                if prog > ep.best + 1e-9:
-                    ep.best = prog
-                    ep.rises.append(ep.steps)
-                for k, st in enumerate(ep.stages):
-                    if ep.latched[st] is None and flags[4 + k, r] > 0.5:
-                        ep.latched[st] = ep.steps
+                advance_episode(ep, float(flags[0, r]), flags[4:, r] > 0.5)
                 if isinstance(ep.quality, RowQuality):
                     ep.quality.add(qt[0][r], qt[1][r])
                 elif ep.quality is not None:

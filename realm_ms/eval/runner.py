@@ -193,14 +193,7 @@ class EpisodeRunner:
             finally:
                 u.capture_sensors = True
             self.info = info
-            self.steps += 1
-            prog = float(info["progression"][0])
-            if prog > self.best + 1e-9:
-                self.best = prog
-                self.rises.append(self.steps)
-            for s in self.stages:
-                if self.latched[s] is None and bool(info[f"stage_{s.lower()}"][0]):
-                    self.latched[s] = self.steps
+            advance_episode(self, float(info["progression"][0]), [bool(info[f"stage_{s.lower()}"][0]) for s in self.stages])
             if self.quality is not None:
                 self.quality.update()
             self._frame(self.obs)
@@ -229,6 +222,18 @@ class EpisodeRunner:
 # ---------------------------------------------------------------------------------------- records
 def _base_record(cfg: RunConfig, key: EpisodeKey) -> dict:
     return dict(task=key.task, perturbation=key.perturbation, seed=key.seed, policy=cfg.policy)
+
+
+def advance_episode(ep, progression: float, stage_hits) -> None:
+    """One env step of an episode's bookkeeping (``ep`` as for ``episode_record``, with ``stages``):
+    the step count, the best progression and the steps where it rose, the first step of each stage."""
+    ep.steps += 1
+    if progression > ep.best + 1e-9:
+        ep.best = progression
+        ep.rises.append(ep.steps)
+    for st, hit in zip(ep.stages, stage_hits):
+        if ep.latched[st] is None and hit:
+            ep.latched[st] = ep.steps
 
 
 def unsupported_record(cfg: RunConfig, key: EpisodeKey, why: str) -> dict:

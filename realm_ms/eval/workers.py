@@ -30,6 +30,7 @@ import numpy as np
 from realm_ms.eval.protocol import EpisodeKey
 from realm_ms.eval.backend import Backend
 from realm_ms.eval.runner import EpisodeRunner, RunConfig
+from realm_ms.registry import Registry
 
 
 class InlineBackend(Backend):
@@ -316,7 +317,10 @@ def _batched_backend(cfg: RunConfig, workers: int, gpu: bool):
 
 
 # --backend NAME -> factory(cfg, workers, gpu_physx_available); ``auto`` resolves to gpu or cpu
-BACKENDS = {"cpu": _cpu_backend, "gpu": _gpu_backend, "batched": _batched_backend}
+BACKENDS: Registry = Registry("backend")
+BACKENDS.register("cpu", _cpu_backend)
+BACKENDS.register("gpu", _gpu_backend)
+BACKENDS.register("batched", _batched_backend)
 
 
 def choose_backend(kind: str, cfg: RunConfig, workers: int):
