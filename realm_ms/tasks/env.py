@@ -174,7 +174,7 @@ class RealmEnv(BaseEnv):
 
     # ------------------------------------------------------------------ loading
     def _load_agent(self, options: dict):
-        pose = sapien.Pose(p=[0, 0, self.scene_def.table_top_z])
+        pose = sapien.Pose(p=[0, 0, self.scene_def.robot_base_z])
         if self.robot_uids != PandaDroid.uid:
             return super()._load_agent(options, pose)
         # built here (not by uid) so this env's control settings and cameras reach the agent
@@ -225,7 +225,7 @@ class RealmEnv(BaseEnv):
             self._forget_contacts(env_idx)
             qpos = self.agent.reset_qpos(torch.as_tensor(spec.init_qpos, dtype=torch.float32).expand(b, -1))
             self.agent.reset(qpos)
-            self.agent.robot.set_pose(Pose.create_from_pq(torch.tensor([0.0, 0.0, self.scene_def.table_top_z]).expand(b, 3)))
+            self.agent.robot.set_pose(Pose.create_from_pq(torch.tensor([0.0, 0.0, self.scene_def.robot_base_z]).expand(b, 3)))
             movable = [o for o in spec.objects if o.role != "fixture"]
             rngs = [self._batched_episode_rng[int(i)] for i in env_idx.cpu()]
             xy, yaw = sample_placements(
@@ -244,6 +244,7 @@ class RealmEnv(BaseEnv):
                 obj.set_pose(p, torch.as_tensor(yaw[:, k], dtype=torch.float32))
             for o in spec.by_role("fixture"):
                 self.objects[o.name].reset_fixture(env_idx, o, self.scene_def)
+            self.scene_def.on_episode_init(self, env_idx)  # scene hook: per-episode materials
             self.perturbations.on_episode_init(self, env_idx)  # perturbation hook: masses, poses, lights
             self.tracker.reset(env_idx)
             if not hasattr(self, "_settle_left"):

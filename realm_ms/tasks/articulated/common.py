@@ -13,8 +13,8 @@ def mat(rgba, roughness=0.6, metallic=0.0):
     return sapien.render.RenderMaterial(base_color=list(rgba), roughness=roughness, metallic=metallic)
 
 
-def box(link_builder, centre, half, material, density=500.0, collision=True, phys=None):
-    pose = sapien.Pose(list(centre))
+def box(link_builder, centre, half, material, density=500.0, collision=True, phys=None, q=(1.0, 0.0, 0.0, 0.0)):
+    pose = sapien.Pose(list(centre), list(q))
     if collision:
         link_builder.add_box_collision(pose=pose, half_size=list(half), density=density, material=phys)
     link_builder.add_box_visual(pose=pose, half_size=list(half), material=material)

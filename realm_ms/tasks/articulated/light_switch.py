@@ -8,9 +8,18 @@ limit. ``toggled()`` = the rocker angle is past ``on_threshold`` on the "on" sid
 no timer and no scripted state. At reset the rocker is set to the "off" limit (or "on" with
 ``?on=1``).
 
-Frame: origin at the bottom centre; the "off" position raises the rocker's +x end (pointing away
-from the robot at yaw 0), so pushing that end down turns the switch on. The +x half of the rocker
-carries an orange "ON" stripe.
+Mounting (``?mount=wall|table``, default: the scene's ``switch_mount``):
+- ``table``: a desk rocker. Origin at the housing's bottom centre; the "off" position raises the
+  rocker's +x end (pointing away from the robot at yaw 0), so pressing that end down turns it on.
+- ``wall`` (REALM's Light_Switch): a wall panel stands on the table, its front face at the origin
+  plane x = 0 and facing the robot (-x); the switch sits on it in a surface box, its centre
+  ``height`` above the table (the scene's ``switch_height``). The rocker's "on" end is its top:
+  pressing the raised top towards the wall (+x) turns it on. Gravity cannot make a detent about
+  a horizontal axis in a wall by itself, so the rocker's centre of mass is set above its pivot
+  (as the table switch has it): the same over-centre detent, the same snap.
+The panel goes ``WallMount.sink`` below the table top (hidden under it), so a switch raised by
+VB-POSE stays on its wall. ``press_point_local()`` / ``press_direction_local()`` tell a policy
+where and which way to press. The "on" half of the rocker carries an orange stripe.
 """
 
 from __future__ import annotations
@@ -40,6 +49,17 @@ class SwitchGeometry:
     on_rgba: tuple = (0.95, 0.45, 0.10, 1.0)
 
 
+@dataclass(frozen=True)
+class WallMount:
+    """The wall panel a wall switch sits on (root frame: front face at x = 0, table top at z = 0)."""
+
+    standoff: float = 0.03  # surface box between the panel and the switch housing (keeps the hand off the wall)
+    panel_half: tuple = (0.02, 0.20, 0.28)  # thickness/2, width/2, height/2 of the panel above the table top
+    sink: float = 0.16  # panel extends this far below the table top (hidden), covering VB-POSE's raise
+    panel_rgba: tuple = (0.90, 0.89, 0.86, 1.0)
+    box_rgba: tuple = (0.96, 0.96, 0.95, 1.0)
+
+
 # colour schemes (base, rocker, on-stripe) selectable with ``?look=k`` (perturbations: other switch models)
 LOOKS = (
     ((0.92, 0.92, 0.90, 1.0), (0.97, 0.97, 0.97, 1.0), (0.95, 0.45, 0.10, 1.0)),
@@ -62,9 +82,13 @@ def scaled_geometry(g: SwitchGeometry, sx=1.0, sy=1.0, sz=1.0, look=0) -> Switch
     )
 
 
+MOUNTS = ("table", "wall")
+
+
 class LightSwitch(ArticulatedTaskObject):
     def __init__(self, env, spec, on: str | int = 0, geometry: SwitchGeometry | None = None,
-                 sx: float = 1.0, sy: float = 1.0, sz: float = 1.0, look: int = 0, goal: str = "on"):
+                 sx: float = 1.0, sy: float = 1.0, sz: float = 1.0, look: int = 0, goal: str = "on",
+                 mount: str | None = None, height: float | None = None, wall: WallMount | None = None):
         super().__init__(env)
         g = geometry or SwitchGeometry()
         if (float(sx), float(sy), float(sz), int(look)) != (1.0, 1.0, 1.0, 0):
@@ -72,33 +96,62 @@ class LightSwitch(ArticulatedTaskObject):
         self.geom = g
         self.init_on = bool(int(on))
         self.goal_on = goal != "off"  # "off": the task is to turn it off (toggled() = reached the off side)
+        scene_def = getattr(env, "scene_def", None)
+        self.mount = mount or getattr(scene_def, "switch_mount", "table")
+        if self.mount not in MOUNTS:
+            raise ValueError(f"light switch mount={self.mount!r}; use one of {MOUNTS} (asset 'articulated/light_switch?mount=wall')")
+        self.wall = wall or WallMount()
+        self.height = float(height if height is not None else getattr(scene_def, "switch_height", 0.15))
+        # placement keeps the switch's own footprint in the region; the panel is the wall behind it
         self.footprint_radius = float(np.hypot(g.base_half[0], g.base_half[1]))
+        self.mount_pose = self._mount_pose()
         self.art = self._build(env.scene, spec.name)
         self.rocker = self.art.links_map["rocker"]
-        self._pivot_z = 2 * g.base_half[2]
         self._anchor_local = torch.tensor([0.0, 0.0, g.pivot_height], device=self.device)
+
+    def _mount_pose(self) -> sapien.Pose:
+        """The switch frame (housing bottom centre, rocker along +x, facing +z) in the root frame."""
+        if self.mount == "table":
+            return sapien.Pose()
+        half = np.sqrt(0.5)  # -90 deg about y: switch +z -> root -x (towards the robot), switch +x -> up
+        return sapien.Pose([-self.wall.standoff, 0.0, self.height], [half, 0.0, -half, 0.0])
 
     def _build(self, scene, name: str):
         g = self.geom
         bx, by, bz = g.base_half
         rx, ry, rz = g.rocker_half
+        m = self.mount_pose
         ab = scene.create_articulation_builder()
         root = ab.create_link_builder()
         root.set_name("housing")
-        box(root, (0, 0, bz), (bx, by, bz), mat(g.base_rgba, 0.5), density=800)
+        if self.mount == "wall":
+            w = self.wall
+            px, py, pz = w.panel_half
+            box(root, (px, 0, pz), (px, py, pz), mat(w.panel_rgba, 0.9), density=800)
+            box(root, (px, 0, -w.sink / 2), (px, py, w.sink / 2), mat(w.panel_rgba, 0.9), collision=False)
+            sb = (w.standoff / 2, by + 0.01, bx + 0.01)  # surface box, slightly larger than the housing
+            box(root, (-w.standoff / 2, 0, self.height), sb, mat(w.box_rgba, 0.5), density=800)
+        box(root, (m * sapien.Pose([0, 0, bz])).p, (bx, by, bz), mat(g.base_rgba, 0.5), density=800, q=m.q)
         lb = ab.create_link_builder(root)
         lb.set_name("rocker")
         lb.set_joint_name("rocker_joint")
-        # revolute axis = joint-frame x; rotate the joint frame so that it is the base's y axis
+        # revolute axis = joint-frame x; rotate the joint frame so that it is the switch's y axis
         q_axis = [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)]  # +90 deg about z: x -> y
         lb.set_joint_properties(
             "revolute", limits=[[-g.tilt, g.tilt]],
-            pose_in_parent=sapien.Pose([0, 0, 2 * bz], q_axis), pose_in_child=sapien.Pose([0, 0, 0], q_axis),
+            pose_in_parent=m * sapien.Pose([0, 0, 2 * bz], q_axis), pose_in_child=sapien.Pose([0, 0, 0], q_axis),
             friction=g.joint_friction, damping=g.joint_damping,
         )
+        # the rocker link's frame is the switch frame moved to the pivot
         box(lb, (0, 0, g.pivot_height), (rx, ry, rz), mat(g.rocker_rgba, 0.35), density=g.rocker_density)
         box(lb, (0, 0, (g.pivot_height - rz) / 2), (0.008, ry * 0.9, (g.pivot_height - rz) / 2), mat(g.base_rgba, 0.5), collision=False)  # pivot web
         box(lb, (rx * 0.55, 0, g.pivot_height + rz + 0.0005), (rx * 0.3, ry * 0.6, 0.0005), mat(g.on_rgba, 0.4), collision=False)
+        if self.mount == "wall":
+            # the plate's mass with its centre straight above the pivot (switch +x is up): gravity's
+            # over-centre detent as on the table, where the plate's own centre of mass lies above it
+            mass = g.rocker_density * 8 * rx * ry * rz
+            inertia = [mass / 3 * (ry**2 + rz**2), mass / 3 * (rx**2 + rz**2), mass / 3 * (rx**2 + ry**2)]
+            lb.set_mass_and_inertia(mass, sapien.Pose([g.pivot_height, 0, 0]), inertia)
         ab.initial_pose = sapien.Pose([0, 0, -2.0])
         art = ab.build(name=name, fix_root_link=True)
         # PhysX joint friction is a load-proportional coefficient (SAPIEN defaults it to 0.05): it would
@@ -122,11 +175,15 @@ class LightSwitch(ArticulatedTaskObject):
         return pose.p + (quaternion_to_matrix(pose.q) @ self._anchor_local)
 
     def press_point_local(self) -> tuple[float, float, float]:
-        """Where to press (in the housing frame) to turn it on: the raised +x end of the rocker top."""
+        """Where to press (in the root frame) to reach the goal: the raised end of the rocker's face."""
         g = self.geom
         x = g.rocker_half[0] * 0.7
         z = 2 * g.base_half[2] + g.pivot_height + g.rocker_half[2] + x * np.sin(g.tilt)
-        return (x if self.goal_on else -x, 0.0, z)
+        return tuple(float(v) for v in (self.mount_pose * sapien.Pose([x if self.goal_on else -x, 0.0, z])).p)
+
+    def press_direction_local(self) -> tuple[float, float, float]:
+        """Which way to press (unit vector, root frame): into the switch face (down on a table, +x on a wall)."""
+        return tuple(float(v) for v in self.mount_pose.to_transformation_matrix()[:3, :3] @ np.array([0.0, 0.0, -1.0]))
 
     def touch_entities(self) -> list:
         return [self.rocker]

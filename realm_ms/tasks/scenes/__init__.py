@@ -3,14 +3,23 @@
 Frame convention: the robot base is the world origin, x forward, z up; the table top is at
 ``table_top_z`` and extends in +x in front of the robot. Tasks place objects in their spawn region
 (robot base frame), so one task can run in any scene.
+
+A scene name may carry options like an asset name: ``"kitchen?table_height=0.74&switch_mount=table"``
+(any field of the scene's dataclass: ``table_height``, ``base_above_table``, ``switch_mount``,
+``switch_height``, ``materials``).
 """
 
 from __future__ import annotations
 
-from realm_ms.tasks.scenes.scene import SCENES, TabletopScene, register_scene  # noqa: F401
+from urllib.parse import parse_qsl
+
+from realm_ms.tasks.scenes.scene import SCENES, TABLE_HEIGHT_RANGE, TabletopScene, register_scene  # noqa: F401
 from realm_ms.tasks.scenes import studio  # noqa: F401  (registers its scenes)
 from realm_ms.tasks.scenes import household  # noqa: F401  (kitchen, dining_room, office, living_room, pomaria)
 
 
 def get_scene(name: str) -> TabletopScene:
-    return SCENES.get(name)
+    """The registered scene ``name``, with ``?key=value&...`` options applied."""
+    base, _, query = str(name).partition("?")
+    scene = SCENES.get(base)
+    return scene.with_options(**dict(parse_qsl(query, strict_parsing=True))) if query else scene

@@ -11,6 +11,13 @@ walls, lighting and background furniture), all built from boxes/cylinders + proc
 
 Everything in the workspace (x 0.17..1.07 m, |y| < 0.75 m in front of the robot) is the table top;
 furniture stands outside it, so task placement never collides with the backdrop.
+
+Materials: the table, floor and walls are material *slots*. Each slot has ``MATERIAL_VARIANTS``
+looks: the scene's own (variant 0) and others of the same kind from ``PALETTES`` (wood species,
+stones, tiles, carpets, wall paints), each with its own grain/tile pattern. With
+``materials="episode"`` (default) every episode draws one variant per slot from its seed, per
+sub-env; the static geometry is built once per sub-env, and a draw only swaps its materials'
+textures, so it costs no rebuild and changes no physics.
 """
 
 from __future__ import annotations
@@ -20,8 +27,28 @@ from dataclasses import dataclass
 import numpy as np
 import sapien
 
-from realm_ms.tasks.scenes.scene import TabletopScene, add_box, add_lights, material, register_scene
+from realm_ms.tasks.scenes.scene import TabletopScene, add_box, add_lights, episode_stream, material, register_scene
 from realm_ms.tasks.scenes import textures as tx
+
+_OAK, _WALNUT = ((0.68, 0.50, 0.31), (0.48, 0.33, 0.19)), ((0.40, 0.26, 0.15), (0.22, 0.13, 0.07))
+_MAPLE, _CHERRY = ((0.82, 0.70, 0.52), (0.66, 0.53, 0.36)), ((0.58, 0.30, 0.20), (0.40, 0.18, 0.11))
+_ASH, _GREY_OAK = ((0.80, 0.76, 0.68), (0.64, 0.58, 0.50)), ((0.56, 0.52, 0.47), (0.40, 0.37, 0.33))
+_WOODS = (_OAK, _WALNUT, _MAPLE, _CHERRY, _ASH, _GREY_OAK)
+_PAINTS = tuple((c, c) for c in ((0.93, 0.93, 0.91), (0.93, 0.90, 0.82), (0.82, 0.86, 0.80), (0.80, 0.74, 0.66),
+                                 (0.78, 0.84, 0.90), (0.90, 0.80, 0.78), (0.86, 0.86, 0.84)))
+#: per texture kind, the (colour a, colour b) looks a slot's variants are drawn from
+PALETTES = {
+    "wood": _WOODS,
+    "planks": _WOODS,
+    "tiles": (((0.85, 0.83, 0.78), (0.30, 0.30, 0.32)), ((0.78, 0.72, 0.62), (0.62, 0.56, 0.48)),
+              ((0.88, 0.90, 0.90), (0.70, 0.76, 0.80)), ((0.72, 0.42, 0.30), (0.60, 0.32, 0.22))),
+    "plain_tiles": (((0.55, 0.55, 0.57), (0.35, 0.35, 0.37)), ((0.84, 0.82, 0.78), (0.62, 0.60, 0.56)),
+                    ((0.26, 0.26, 0.28), (0.12, 0.12, 0.13)), ((0.72, 0.64, 0.54), (0.52, 0.44, 0.36))),
+    "fabric": tuple((c, c) for c in ((0.30, 0.32, 0.36), (0.45, 0.40, 0.35), (0.26, 0.34, 0.30), (0.52, 0.52, 0.54), (0.35, 0.38, 0.55))),
+    "plaster": _PAINTS,
+}
+MATERIAL_VARIANTS = 4  # looks per slot: the scene's own + 3 from its palette
+SLOTS = ("table", "floor", "wall")
 
 
 def _cyl(b, radius, half_len, pose: sapien.Pose, mat, collision=True):
@@ -48,10 +75,20 @@ class HouseholdScene(TabletopScene):
     seed: int = 0
 
     # ------------------------------------------------------------------ materials
-    def _mat(self, key: str, spec, roughness=0.6, metallic=0.0):
-        kind, a, b = spec
-        fallback = tuple(a) + (1.0,)
-        s = self.seed
+    def slot_specs(self, slot: str) -> tuple:
+        """The ``MATERIAL_VARIANTS`` texture specs ``(kind, a, b, seed)`` of a slot: the scene's own
+        first, then looks of the same kind picked (per scene, fixed) from ``PALETTES``."""
+        kind, a, b = {"table": self.table_tex, "floor": self.floor_tex, "wall": ("plaster", self.wall_rgb, self.wall_rgb)}[slot]
+        own = (tuple(a), tuple(b))
+        others = [p for p in PALETTES[kind] if p != own]
+        pick = np.random.default_rng([self.seed, len(slot), ord(slot[0])]).choice(len(others), MATERIAL_VARIANTS - 1, replace=False)
+        looks = [own] + [others[k] for k in pick]
+        return tuple((kind, la, lb, self.seed + 101 * v) for v, (la, lb) in enumerate(looks))
+
+    def _texture(self, spec):
+        """(cache key, maker, fallback colour) of a texture spec ``(kind, a, b[, seed])``."""
+        kind, a, b, *rest = spec
+        s = rest[0] if rest else self.seed
         makers = {
             "wood": lambda: tx.wood(a, b, seed=s, rings=45),
             "planks": lambda: tx.wood(a, b, seed=s + 1, rings=40, planks=8),
@@ -60,15 +97,39 @@ class HouseholdScene(TabletopScene):
             "fabric": lambda: tx.fabric(a, seed=s),
             "plaster": lambda: tx.plaster(a, seed=s),
         }
-        return tx.textured_material(f"{self.name}/{key}", makers[kind], fallback, roughness, metallic)
+        key = f"{kind}/{tuple(a)}/{tuple(b)}/{s}"
+        return key, makers[kind], tuple(a) + (1.0,)
+
+    def _mat(self, key: str, spec, roughness=0.6, metallic=0.0):
+        return tx.textured_material(*self._texture(spec), roughness, metallic)
+
+    def on_episode_init(self, env, env_idx) -> None:
+        """Draw each slot's look for the sub-envs ``env_idx`` from their episode seeds."""
+        if self.materials != "episode":
+            return
+        env.scene_looks = getattr(env, "scene_looks", [{} for _ in range(env.num_envs)])
+        for i in (int(k) for k in env_idx):
+            rng = episode_stream(env, i, f"scene-materials/{self.name}")
+            for slot in SLOTS:
+                v = int(rng.integers(MATERIAL_VARIANTS))
+                tx.apply_texture(env.scene_slots[i][slot], *self._texture(self.slot_specs(slot)[v]))
+                env.scene_looks[i][slot] = v
 
     # ------------------------------------------------------------------ building
     def build(self, env) -> None:
+        """One static actor per sub-env, each with its own slot materials (``env.scene_slots[i]``),
+        so that an episode's material draw can differ between sub-envs."""
+        env.scene_slots = [self._build_one(env, i) for i in range(env.num_envs)]
+        env.scene_looks = [{slot: 0 for slot in SLOTS} for _ in range(env.num_envs)]
+
+    def _build_one(self, env, i: int) -> dict:
         b = env.scene.create_actor_builder()
+        b.set_scene_idxs([i])
         hx, hy, hz = self.table_half_size
         cx, cy = self.table_center_xy
         top, fz = self.table_top_z, self.floor_z
-        table_m = self._mat("table", self.table_tex, roughness=0.45)
+        slots = {slot: self._mat(slot, self.slot_specs(slot)[0], roughness=r) for slot, r in zip(SLOTS, (0.45, 0.7, 0.95))}
+        table_m = slots["table"]
         add_box(b, (hx, hy, hz), sapien.Pose([cx, cy, top - hz]), table_m)
         body_h = (top - 2 * hz - fz) / 2
         if self.table_style == "counter":
@@ -92,8 +153,8 @@ class HouseholdScene(TabletopScene):
         # robot pedestal
         add_box(b, (0.12, 0.12, self.robot_stand_height / 2 - 0.005), sapien.Pose([0, 0, fz + self.robot_stand_height / 2 - 0.005]), material((0.2, 0.2, 0.22, 1), 0.4, 0.3))
         # floor and walls
-        add_box(b, (4.0, 4.0, 0.01), sapien.Pose([0.5, 0, fz - 0.01]), self._mat("floor", self.floor_tex, roughness=0.7))
-        wall = self._mat("wall", ("plaster", self.wall_rgb, self.wall_rgb), roughness=0.95)
+        add_box(b, (4.0, 4.0, 0.01), sapien.Pose([0.5, 0, fz - 0.01]), slots["floor"])
+        wall = slots["wall"]
         add_box(b, (0.02, 3.0, 1.5), sapien.Pose([2.3, 0, fz + 1.5]), wall, collision=False)
         add_box(b, (2.5, 0.02, 1.5), sapien.Pose([0.3, 2.2, fz + 1.5]), wall, collision=False)
         add_box(b, (2.5, 0.02, 1.5), sapien.Pose([0.3, -2.2, fz + 1.5]), wall, collision=False)
@@ -105,7 +166,8 @@ class HouseholdScene(TabletopScene):
         for name in self.furniture:
             getattr(self, f"_f_{name}")(b, fz)
         b.initial_pose = sapien.Pose()
-        b.build_static(name="scene_static")
+        b.build_static(name=f"scene_static-{i}")
+        return slots
 
     # ------------------------------------------------------------------ background furniture
     def _f_fridge(self, b, fz):
@@ -179,33 +241,33 @@ class HouseholdScene(TabletopScene):
 
 
 KITCHEN = register_scene(HouseholdScene(
-    "kitchen", table_style="counter", table_half_size=(0.45, 0.9, 0.02),
+    "kitchen", table_height=0.8, table_style="counter", table_half_size=(0.45, 0.9, 0.02),
     table_tex=("plain_tiles", (0.55, 0.55, 0.57), (0.35, 0.35, 0.37)),
     floor_tex=("tiles", (0.85, 0.83, 0.78), (0.30, 0.30, 0.32)), wall_rgb=(0.93, 0.90, 0.82),
     furniture=("fridge", "wall_shelf"), ambient=(0.38, 0.36, 0.33), sun_rgb=(0.95, 0.85, 0.70),
     lamps=((0.6, 0.0, 1.5, 1.3, 1.05, 0.8),), seed=1,
 ))
 DINING_ROOM = register_scene(HouseholdScene(
-    "dining_room", table_tex=("wood", (0.68, 0.50, 0.31), (0.48, 0.33, 0.19)),
+    "dining_room", table_height=0.75, table_tex=("wood", (0.68, 0.50, 0.31), (0.48, 0.33, 0.19)),
     floor_tex=("planks", (0.60, 0.44, 0.28), (0.38, 0.26, 0.16)), wall_rgb=(0.82, 0.86, 0.80), wall2_rgb=(0.95, 0.95, 0.92),
     furniture=("chairs", "sideboard", "window"), ambient=(0.4, 0.4, 0.42), sun_dir=(0.6, 0.2, -0.8), sun_rgb=(1.0, 0.97, 0.9),
     lamps=((0.6, 0.0, 1.4, 1.1, 1.0, 0.9),), seed=2,
 ))
 OFFICE = register_scene(HouseholdScene(
-    "office", table_half_size=(0.42, 0.8, 0.015), table_tex=("plaster", (0.93, 0.93, 0.91), (0.93, 0.93, 0.91)),
+    "office", table_height=0.74, switch_mount="table", table_half_size=(0.42, 0.8, 0.015), table_tex=("plaster", (0.93, 0.93, 0.91), (0.93, 0.93, 0.91)),
     floor_tex=("fabric", (0.30, 0.32, 0.36), (0.30, 0.32, 0.36)), wall_rgb=(0.90, 0.91, 0.93),
     furniture=("partitions", "filing_cabinet", "plant"), ambient=(0.42, 0.43, 0.46), sun_dir=(0.0, 0.1, -1.0), sun_rgb=(0.85, 0.88, 0.95),
     lamps=((0.4, 0.4, 1.7, 1.0, 1.05, 1.15), (0.8, -0.4, 1.7, 1.0, 1.05, 1.15)), seed=3,
 ))
 LIVING_ROOM = register_scene(HouseholdScene(
-    "living_room", table_style="pedestal", table_half_size=(0.45, 0.7, 0.025),
+    "living_room", table_height=0.72, table_style="pedestal", table_half_size=(0.45, 0.7, 0.025),
     table_tex=("wood", (0.40, 0.26, 0.15), (0.22, 0.13, 0.07)),
     floor_tex=("planks", (0.72, 0.58, 0.40), (0.50, 0.38, 0.25)), wall_rgb=(0.80, 0.74, 0.66),
     furniture=("sofa", "plant", "floor_lamp", "rug"), ambient=(0.33, 0.31, 0.29), sun_dir=(-0.3, 0.5, -0.8), sun_rgb=(0.9, 0.8, 0.65),
     lamps=((0.5, 0.3, 1.3, 1.2, 1.0, 0.75),), seed=4,
 ))
 POMARIA = register_scene(HouseholdScene(
-    "pomaria", table_tex=("wood", (0.80, 0.68, 0.50), (0.62, 0.50, 0.34)),
+    "pomaria", table_height=0.76, table_tex=("wood", (0.80, 0.68, 0.50), (0.62, 0.50, 0.34)),
     floor_tex=("tiles", (0.78, 0.72, 0.62), (0.62, 0.56, 0.48)), wall_rgb=(0.95, 0.93, 0.88), wall2_rgb=(0.55, 0.62, 0.58),
     furniture=("window", "chairs", "plant"), ambient=(0.45, 0.45, 0.45), sun_dir=(0.5, -0.3, -0.9), sun_rgb=(1.0, 0.98, 0.95),
     lamps=((0.7, 0.0, 1.2, 2.0, 1.9, 1.8),), seed=5,

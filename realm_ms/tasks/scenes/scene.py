@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+import dataclasses
+import zlib
 from dataclasses import dataclass
 
+import numpy as np
 import sapien
 
 from realm_ms.registry import Registry
 
 SCENES: Registry["TabletopScene"] = Registry("scene")
+
+# DROID's tables are ordinary household / lab tables: table tops 0.72-0.80 m above the floor
+TABLE_HEIGHT_RANGE = (0.72, 0.80)
+SWITCH_MOUNTS = ("wall", "table")
+MATERIAL_MODES = ("episode", "nominal")
 
 
 def register_scene(scene: "TabletopScene") -> "TabletopScene":
@@ -39,19 +47,68 @@ def add_box(builder, half_size, pose: sapien.Pose, mat, collision: bool = True) 
     builder.add_box_visual(pose=pose, half_size=list(half_size), material=mat)
 
 
+def episode_stream(env, i: int, name: str) -> np.random.Generator:
+    """A generator seeded by sub-env ``i``'s episode seed and ``name`` only: the same seed draws the
+    same scene, and the draw never shifts the episode RNG that placement and perturbations use."""
+    return np.random.default_rng([int(env._episode_seed[i]), zlib.crc32(name.encode())])
+
+
 @dataclass(frozen=True)
 class TabletopScene:
-    """Static surroundings of a task: floor, walls, table, furniture, lights."""
+    """Static surroundings of a task: floor, walls, table, furniture, lights.
+
+    Frame: the robot base is the world origin (cameras and spawn regions are given in it). The
+    table top is ``base_above_table`` below the base (0: level with it, as every scene has it by
+    default) and ``table_height`` above the floor; the robot's pedestal fills the rest.
+    """
 
     name: str
-    table_top_z: float = 0.0
+    table_height: float = 0.76  # floor -> table top (m); DROID class: TABLE_HEIGHT_RANGE
+    base_above_table: float = 0.0  # robot base above the table top (m); moves the table and all it holds
     table_half_size: tuple[float, float, float] = (0.45, 0.75, 0.02)  # x, y, thickness/2
     table_center_xy: tuple[float, float] = (0.62, 0.0)
-    robot_stand_height: float = 0.76  # pedestal under the robot base, down to the floor
+    switch_mount: str = "wall"  # where a light switch sits: "wall" (a wall panel, REALM) or "table"
+    switch_height: float = 0.15  # wall mount: switch centre above the table top (m)
+    materials: str = "episode"  # "episode": material variants drawn per episode; "nominal": the scene's own look
+
+    def __post_init__(self) -> None:
+        if self.switch_mount not in SWITCH_MOUNTS:
+            raise ValueError(f"scene {self.name!r}: switch_mount={self.switch_mount!r}; use one of {SWITCH_MOUNTS}")
+        if self.materials not in MATERIAL_MODES:
+            raise ValueError(f"scene {self.name!r}: materials={self.materials!r}; use one of {MATERIAL_MODES}")
+        if not 0.4 <= self.table_height <= 1.2:
+            raise ValueError(f"scene {self.name!r}: table_height={self.table_height} m is not a table; DROID's are {TABLE_HEIGHT_RANGE}")
+        if not -0.3 <= self.base_above_table <= 0.3:
+            raise ValueError(f"scene {self.name!r}: base_above_table={self.base_above_table} m is outside [-0.3, 0.3]")
+
+    robot_base_z = 0.0  # the world origin
+
+    @property
+    def table_top_z(self) -> float:
+        return -self.base_above_table
+
+    @property
+    def robot_stand_height(self) -> float:
+        """Pedestal under the robot base, down to the floor."""
+        return self.table_height + self.base_above_table
 
     @property
     def floor_z(self) -> float:
-        return self.table_top_z - self.robot_stand_height
+        return self.table_top_z - self.table_height
+
+    def with_options(self, **options) -> "TabletopScene":
+        """This scene with some fields changed (``get_scene("kitchen?table_height=0.74")``)."""
+        fields = {f.name: f for f in dataclasses.fields(self) if f.name != "name"}
+        changes = {}
+        for key, raw in options.items():
+            if key not in fields:
+                raise ValueError(f"scene {self.name!r} has no option {key!r}; options: {', '.join(sorted(fields))}")
+            cur = getattr(self, key)
+            try:
+                changes[key] = type(cur)(raw) if isinstance(cur, (int, float, str)) else raw
+            except (TypeError, ValueError):
+                raise ValueError(f"scene option {key}={raw!r}: expected a {type(cur).__name__}") from None
+        return dataclasses.replace(self, **changes)
 
     def build(self, env) -> None:
         """Add static actors to ``env.scene`` (all sub-scenes)."""
@@ -59,3 +116,6 @@ class TabletopScene:
 
     def load_lighting(self, env) -> None:
         raise NotImplementedError
+
+    def on_episode_init(self, env, env_idx) -> None:
+        """Per-episode draws of the sub-envs ``env_idx`` (materials); physics-neutral."""

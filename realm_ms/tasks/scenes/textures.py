@@ -90,6 +90,13 @@ _TEXTURES: dict = {}
 def textured_material(key: str, make, fallback_rgba, roughness: float = 0.6, metallic: float = 0.0) -> sapien.render.RenderMaterial:
     """A material whose base colour is the procedural texture ``make()`` (cached under ``key``)."""
     m = sapien.render.RenderMaterial(base_color=list(fallback_rgba), roughness=roughness, metallic=metallic)
+    apply_texture(m, key, make, fallback_rgba)
+    return m
+
+
+def apply_texture(m: sapien.render.RenderMaterial, key: str, make, fallback_rgba) -> None:
+    """Give ``m`` the texture ``make()`` (cached under ``key``), or the plain ``fallback_rgba``
+    without a render device. Works on a built scene too (per-episode material draws)."""
     try:
         if key not in _TEXTURES:
             _TEXTURES[key] = sapien.render.RenderTexture2D(make(), "R8G8B8A8Unorm", mipmap_levels=4, srgb=True)
@@ -97,4 +104,3 @@ def textured_material(key: str, make, fallback_rgba, roughness: float = 0.6, met
         m.set_base_color_texture(_TEXTURES[key])
     except Exception:  # no render device: plain colour
         m.base_color = list(fallback_rgba)
-    return m
