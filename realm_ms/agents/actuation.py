@@ -14,7 +14,11 @@ Hook order, every physics step (all tensors batched, shape (B, 7) unless noted):
     tau             = actuator(tau)            # what the motors deliver (saturation, rate limit)
     tau            += plant_torque()           # physics the rigid model lacks (friction)
 
-Build-time effects (armature, payload) act on the articulation once, in ``build``.
+Build-time effects (armature, payload) act on the articulation once, in ``build``; what they add to
+the plant is declared to the driver (``plant_inertia``, ``plant_load``) so its step-exact
+integration predicts the plant it drives. A stage with ``within_step = True`` (friction: its torque
+depends on the velocity *within* a 120 Hz physics step) is evaluated by the exact integrator at
+every tick of the 1 kHz law inside the step, as the real controller's plant would feel it.
 """
 
 from __future__ import annotations
@@ -45,6 +49,8 @@ class ControlState:
 class ActuationStage:
     """Base class: every hook is the identity. Subclasses override what they change."""
 
+    within_step = False  # plant_torque is evaluated at the law's ticks inside the step (see module doc)
+
     def reset(self, num_envs: int, device: torch.device, env_idx: torch.Tensor | None, q: torch.Tensor) -> None:
         """Clear internal state (delay lines, backlash position) for the envs in ``env_idx``."""
 
@@ -69,6 +75,12 @@ class ActuationStage:
     def plant_inertia(self, state: ControlState) -> torch.Tensor | None:
         """Joint-space inertia (B, n, n) this stage adds to the plant (armature, payload), so the
         driver's step-exact integration predicts the plant it drives; None = none."""
+        return None
+
+    def plant_load(self, state: ControlState) -> torch.Tensor | None:
+        """Joint torque (B, n) the simulated plant itself applies beyond the rigid model the
+        controller cancels (a payload's gravity and Coriolis): physics applies it, the driver only
+        predicts it; None = none."""
         return None
 
 
@@ -109,13 +121,22 @@ class ActuationModel(ActuationStage):
             tau = s.actuator(tau, state)
         return tau
 
-    def plant_torque(self, state):
-        return self._sum_over_stages("plant_torque", state)
+    @property
+    def within_step(self) -> bool:
+        return any(s.within_step for s in self.stages)
+
+    def plant_torque(self, state, within_step: bool | None = None):
+        """All stages' plant torque, or only those with ``within_step`` equal to the flag."""
+        return self._sum_over_stages("plant_torque", state, within_step)
 
     def plant_inertia(self, state):
         return self._sum_over_stages("plant_inertia", state)
 
-    def _sum_over_stages(self, term: str, state):
+    def plant_load(self, state):
+        return self._sum_over_stages("plant_load", state)
+
+    def _sum_over_stages(self, term: str, state, within_step: bool | None = None):
         """The stages' ``term`` added up; None when no stage contributes."""
-        parts = [t for t in (getattr(s, term)(state) for s in self.stages) if t is not None]
+        stages = [s for s in self.stages if within_step is None or s.within_step == within_step]
+        parts = [t for t in (getattr(s, term)(state) for s in stages) if t is not None]
         return sum(parts[1:], parts[0]) if parts else None

@@ -225,6 +225,7 @@ class DroidArmDriver:
         # "exact": last step's torques beyond the motor's (joint friction, plant effects), which the
         # closed loop is predicted to react to within the step (a constant load shifts its equilibrium)
         self.plant_prev = torch.zeros(num_envs, model.dof, device=self.device)
+        self.within_prev = 0.0  # last step-average torque of the within-step effects (path prediction only)
         self._eye = torch.eye(model.dof, device=self.device)
 
     def _implicit_damping(self, gains: ImpedanceGains) -> torch.Tensor:
@@ -247,6 +248,8 @@ class DroidArmDriver:
         self.applied_torque[idx] = 0.0
         self.velocity_correction[idx] = 0.0
         self.plant_prev[idx] = 0.0
+        if torch.is_tensor(self.within_prev):
+            self.within_prev[idx] = 0.0
         self.actuation.reset(self.num_envs, self.device, env_idx, q[:, : self.model.dof])
 
     def set_target(self, q_target: torch.Tensor) -> None:
@@ -309,8 +312,12 @@ class DroidArmDriver:
         else:  # nominal robot: skip the stage plumbing (this runs 8x per action)
             q_m, qd_m, q_t = q, qd, self.q_target
         gains = act.gains(self.gains) if act else self.gains
+        ext = self.plant_prev  # torques the plant receives beyond the law's, as the exact step predicts them
+        load = act.plant_load(state) if exact and act else None
+        if load is not None:
+            ext = ext + load
         if exact and self.config.follows_path:
-            step, bias = self._path_step(q_m, qd_m, q_t, gains, state if act else None, dt)
+            step, bias = self._path_step(q_m, qd_m, q_t, gains, state if act else None, ext + self.within_prev, dt)
         elif exact:
             # the closed loop's transition over this step from J(q), M(q) (model_rate="physics"), or
             # once per target (model_rate="control": cheaper, ~1-2 mrad RMS further from the 1 kHz law)
@@ -331,10 +338,16 @@ class DroidArmDriver:
             if self.config.model_rate == "control":
                 kp, kd, bias, q_ref, dg = self._terms
                 bias = bias + (dg @ (q_m - q_ref)[..., None])[..., 0]  # first-order gravity between refreshes
+        within = None
         if act:
             state.extra["bias"] = bias  # model feed-forward, reused by effects (saves them an RNEA)
+            if exact:
+                ext = ext + self._measured_feedforward_load(q, qd, q_m, qd_m, bias)
+                if act.within_step:
+                    within = self._within_step_torque(state, q_m - q_t, qd - qd_m)
+        f_step = None
         if exact:
-            tau, v_end, v_avg = self._exact_torque(q_m - q_t, qd_m, qd_held + (qd_m - qd), step, bias)
+            tau, v_end, v_avg, f_step = self._exact_torque(q_m - q_t, qd_m, qd_held + (qd_m - qd), step, bias, ext, within)
             tau = tau + bias
         else:
             tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
@@ -352,12 +365,17 @@ class DroidArmDriver:
         friction = self._neg_friction * torch.tanh(qd / self.joint_physics.friction_velocity)
         tau = tau + limit_dissipative(friction, qd, self.inertia_lower_bound, dt)
         if act:
-            plant = act.plant_torque(state)
+            # within-step effects were integrated inside the exact step: their step-average torque
+            plant = act.plant_torque(state, within_step=False if within is not None else None)
             if plant is not None:
                 tau = tau + plant
+            if f_step is not None:
+                tau = tau + f_step
         self.applied_torque = tau
         if exact:
-            self.plant_prev = tau - law  # all but the law's own torque (actuator stages included)
+            # all but the law's own torque (actuator stages included) and what the step predicted itself
+            self.plant_prev = tau - law if f_step is None else tau - law - f_step
+            self.within_prev = 0.0 if f_step is None else f_step
         self.time = self.time + dt
         # the implicit drive will apply about -d*qd; pre-compensate so the total matches the law
         return tau + self.implicit_damping * qd if self.config.integrator == "implicit_damping" else tau
@@ -691,7 +709,7 @@ class DroidArmDriver:
         plan.update(q=q_path, target=q_t.clone(), dg=self._gravity_jacobian(q), k=torch.zeros(b, dtype=torch.long, device=q.device))
         return plan
 
-    def _path_step(self, q_m, qd_m, q_t, gains: TorchGains, state, dt: float) -> tuple[tuple, torch.Tensor]:
+    def _path_step(self, q_m, qd_m, q_t, gains: TorchGains, state, ext, dt: float) -> tuple[tuple, torch.Tensor]:
         """(step matrices, feed-forward) for this physics step from the plan. Each row has its own
         step index and gets a new plan when its plan is used up, its target changed or its arm left
         the path by > ``path_tolerance`` (contact, saturation, latency): a row's plans depend on its
@@ -711,11 +729,11 @@ class DroidArmDriver:
         if full or rows is not None:
             extra = self.actuation.plant_inertia(state) if state is not None else None
             if full:
-                self._plan, self._plan_dt = self._plan_path(q_m, qd_m, q_t, gains, extra, self.plant_prev, dt, steps, pred), dt
+                self._plan, self._plan_dt = self._plan_path(q_m, qd_m, q_t, gains, extra, ext, dt, steps, pred), dt
                 p = self._plan
             else:
                 new = self._plan_path(q_m[rows], qd_m[rows], q_t[rows], gains.map(lambda x: x[rows]),
-                                      None if extra is None else extra[rows], self.plant_prev[rows], dt, steps,
+                                      None if extra is None else extra[rows], ext[rows], dt, steps,
                                       tuple(x[rows] for x in pred))
                 for key, v in new.items():
                     p[key][rows] = v
@@ -730,15 +748,16 @@ class DroidArmDriver:
             self._row_index = torch.arange(b, device=device)
         return self._row_index
 
-    def _exact_torque(self, err: torch.Tensor, qd: torch.Tensor, qd_held: torch.Tensor, step: tuple, bias: torch.Tensor):
+    def _exact_torque(self, err: torch.Tensor, qd: torch.Tensor, qd_held: torch.Tensor, step: tuple, bias: torch.Tensor,
+                      ext: torch.Tensor, within=None):
         """Motor torque (without feed-forward) that moves the plant to the closed loop's position after
         dt with one semi-implicit Euler step from the velocity the engine holds (``qd_held``), given
-        that the plant also receives about last step's non-motor torque ``plant_prev`` (a constant
-        load moves the loop's equilibrium to e* = Kp^-1 load); also the predicted end and average
-        velocities."""
+        that the plant also receives the load ``ext`` (last step's non-motor torque and the plant's
+        known loads; a constant load moves the loop's equilibrium to e* = Kp^-1 load); also the
+        predicted end and average velocities, and the step-average torque of the ``within``-step
+        effects (None without them)."""
         mass, minv, phi, dt, kp, kd, ticks = step
         n = err.shape[1]
-        ext = self.plant_prev
         e_star = torch.linalg.solve(kp, ext[..., None])[..., 0]
         x0 = torch.cat([err, qd], 1)
         x1 = (phi @ torch.cat([err - e_star, qd], 1)[..., None])[..., 0]
@@ -748,23 +767,64 @@ class DroidArmDriver:
         ends = torch.stack([x0, x1])
         tau_ends = -(kp @ ends[..., :n, None] + kd @ ends[..., n:, None])[..., 0] + bias
         sat = ((tau_ends > self.effort_limits) | (tau_ends < self._neg_effort_limits)).any(-1).any(0)
-        if bool(sat.any()):
+        f_step = None
+        if within is not None:
+            # the within-step effects' torque changes inside the step: run the law's ticks; rows
+            # where they stay zero (effects at their off-values) keep the closed form bit for bit
+            x_ticks, f_step = self._law_ticks(err, qd, minv, kp, kd, bias, ext, dt / ticks, ticks, within)
+            rows = (f_step != 0).any(-1) | sat
+            x1 = torch.where(rows[:, None], x_ticks, x1)
+        elif bool(sat.any()):
             rows = torch.nonzero(sat)[:, 0]
-            x1[rows] = self._saturated_ticks(err[rows], qd[rows], minv[rows] if minv.shape[0] > 1 else minv,
-                                             kp[rows], kd[rows], bias[rows], ext[rows], dt / ticks, ticks)
+            x1[rows] = self._law_ticks(err[rows], qd[rows], minv[rows] if minv.shape[0] > 1 else minv,
+                                       kp[rows], kd[rows], bias[rows], ext[rows], dt / ticks, ticks)[0]
         v_avg = (x1[:, :n] - err) / dt
         tau = (mass @ ((v_avg - qd_held) / dt)[..., None])[..., 0] - ext
-        return tau, x1[:, n:], v_avg
+        if f_step is not None:
+            tau = tau - f_step
+        return tau, x1[:, n:], v_avg, f_step
 
-    def _saturated_ticks(self, e, v, minv, kp, kd, bias, ext, t: float, ticks: int) -> torch.Tensor:
-        """The law's ticks with its torque clipped to the effort limits, on M qdd = tau - bias + ext."""
+    def _law_ticks(self, e, v, minv, kp, kd, bias, ext, t: float, ticks: int, within=None):
+        """The law's ticks with its torque clipped to the effort limits, on M qdd = tau - bias + ext
+        (+ the ``within``-step effects' torque at each tick). Returns the end state [e, v] and the
+        within-step torque averaged over the ticks (None without ``within``)."""
+        f_sum = None
         for _ in range(ticks):
             tau = -(kp @ e[..., None] + kd @ v[..., None])[..., 0] + bias
             tau = torch.maximum(torch.minimum(tau, self.effort_limits), self._neg_effort_limits)
-            a = (minv @ (tau - bias + ext)[..., None])[..., 0]
+            net = tau - bias + ext
+            if within is not None:
+                f = within(e, v, tau, t)
+                f_sum = f if f_sum is None else f_sum + f
+                net = net + f
+            a = (minv @ net[..., None])[..., 0]
             e = e + t * v + (0.5 * t * t) * a
             v = v + t * a
-        return torch.cat([e, v], 1)
+        return torch.cat([e, v], 1), (None if f_sum is None else f_sum / ticks)
+
+    def _within_step_torque(self, state: ControlState, err0: torch.Tensor, qd_offset: torch.Tensor):
+        """(e, v, law torque, tick) -> the within-step stages' plant torque at that tick, from the true
+        state the tick reaches (``qd_offset``: true minus measured velocity, held over the step)."""
+        act, q0 = self.actuation, state.q
+
+        def torque(e, v, tau, t):
+            tick = ControlState(q=q0 + (e - err0), qd=v + qd_offset, q_target=state.q_target, dt=t, model=self.model,
+                                time=state.time, extra={"tau_motor": tau, "bias": state.extra["bias"]})
+            f = act.plant_torque(tick, within_step=True)
+            return torch.zeros_like(e) if f is None else f
+
+        return torque
+
+    def _measured_feedforward_load(self, q, qd, q_m, qd_m, bias) -> torch.Tensor | float:
+        """Where the controller measures a state other than the true one (encoder bias, backlash), its
+        feed-forward (taken at the measured state) does not cancel the plant's own Coriolis and
+        gravity (at the true state): the difference is a load on the true plant."""
+        if q_m is q and qd_m is qd:
+            return 0.0
+        rows = ((q_m != q) | (qd_m != qd)).any(-1)
+        if not bool(rows.any()):
+            return 0.0
+        return torch.where(rows[:, None], bias - self._bias(q, qd, self.model.link_frames(q)), 0.0)
 
 
 def configure_arm_joints(joints_per_arm_joint, driver: DroidArmDriver) -> None:

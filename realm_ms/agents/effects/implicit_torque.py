@@ -21,9 +21,15 @@ class ImplicitJointTorque(Effect):
     for viscous damping). I_j is evaluated at the configuration of each reset (a few percent error
     along a segment only softens the stick phase, it never destabilises it: a 0.8 safety factor
     keeps the deadbeat stop from overshooting).
+
+    With the exact integrator (the default) the driver evaluates these effects at every 1 kHz tick
+    of the law inside the physics step (``within_step``), from the tick's velocity and law torque:
+    a friction torque held over a whole 8.3 ms step, or lagged by one, cannot follow the wrist's
+    loop, which settles within a step (h Kd / I ~ 3), and sticks or slides at the wrong moments.
     """
 
     order = 90
+    within_step = True
     SAFETY = 0.8
 
     def reset(self, num_envs, device, env_idx, q):
