@@ -100,6 +100,37 @@ def test_grasp_slice_follows_scale_and_shape():
     assert np.isclose(grasp_height(0.0, 0.17, 0.058) - pad_below_tcp(0.058), 0.075)
 
 
+def test_grasp_slice_puts_the_whole_pad_on_the_object():
+    """A tea bag's bag ends 4 mm past its bounding-box centre (then a gap, then its tag): the pinch
+    must sit where the object is under the whole 22 mm pad, not at the centre."""
+    from realm_ms.assets import get_object_spec
+    from realm_ms.expert.primitives import PAD_HALF_WIDTH, scaled_vertices
+
+    bag = get_object_spec("proc/tea_bag/0")
+    one = np.ones(3)
+    sl = grasp_slice(bag, one, bag.extents)
+    v = scaled_vertices(bag, one)
+    ax = int(np.argmax(bag.extents[:2]))
+    c = sl.point[ax]
+    for edge in (c - PAD_HALF_WIDTH, c + PAD_HALF_WIDTH):  # the object reaches past both pad edges, at full height
+        near = v[np.abs(v[:, ax] - edge) < 0.003]
+        assert near.size and near[:, 2].max() > 0.9 * bag.extents[2], (c, edge)
+
+
+@pytest.mark.slow
+def test_expert_rotates_a_tea_bag():
+    """RotateMug x SB-NOUN seed 1 makes the 6 mm tea bag the object to rotate: pinched at full grip
+    force its rounded edge slipped between the pads (5/10 in that cell); a gentle pinch holds it."""
+    env = gym.make("REALM-RotateMug-v1", obs_mode="state", perturbation="SB-NOUN")
+    try:
+        obs, info = env.reset(seed=1)
+        assert info["perturbation"]["params"][0]["SB-NOUN"]["swap_with"] == "tea_bag"
+        res = run_episode(env, 1)
+        assert res["success"], res
+    finally:
+        env.close()
+
+
 @pytest.mark.parametrize("env_id", sorted(TASKS))
 def test_expert_solves_fixed_seed(env_id):
     env = gym.make(env_id, obs_mode="state")

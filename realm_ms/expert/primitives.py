@@ -116,13 +116,27 @@ def grip(ctx: Ctx, value: float, steps: int = 10):
     yield from hold(ctx, steps, grip=value)
 
 
-def close(ctx: Ctx, entity=None, max_steps: int = 14):
-    """Close until the two-pad grasp holds ``entity`` (plus 3 steps to build force) or timeout."""
-    ctx.cmd = Target(ctx.cmd.p.copy(), ctx.cmd.yaw, CLOSED)
+GENTLE_STEP = 0.03  # gripper position per control step when closing gently (~1/4 of full speed)
+GENTLE_SQUEEZE = 0.02  # gripper position past first grasp that a gentle pinch holds
+
+
+def close(ctx: Ctx, entity=None, max_steps: int = 14, gentle: bool = False):
+    """Close until the two-pad grasp holds ``entity`` (plus 3 steps to build force) or timeout.
+
+    ``gentle`` (flat objects): close a little per step and, once both pads hold, keep the grip
+    just past that width. Closed at full command the pads squeeze with the drive's saturated force
+    (~40 N each) and a few-mm object's rounded edge slips between them: the pads overlap it,
+    PhysX pushes them apart along its thin side, i.e. up onto its top, and the object stays on the table."""
+    if not gentle:
+        ctx.cmd = Target(ctx.cmd.p.copy(), ctx.cmd.yaw, CLOSED)
     held = 0
-    for _ in range(max_steps):
+    for _ in range(max_steps + (int(CLOSED / GENTLE_STEP) if gentle else 0)):
+        if gentle and not held:
+            ctx.cmd = Target(ctx.cmd.p.copy(), ctx.cmd.yaw, min(CLOSED, ctx.gripper_pos() + GENTLE_STEP))
         yield ctx.cmd
         if entity is not None and ctx.grasped(entity):
+            if gentle and not held:
+                ctx.cmd = Target(ctx.cmd.p.copy(), ctx.cmd.yaw, min(CLOSED, ctx.gripper_pos() + GENTLE_SQUEEZE))
             held += 1
             if held >= 3:
                 return
@@ -268,6 +282,15 @@ class GraspSlice:
 
 
 _PROFILE_CACHE: dict = {}
+PAD_HALF_WIDTH = 0.011  # m, half the 2F-85 pad's extent across the closing direction (20.7 mm, measured on the sim)
+
+
+def _under_whole_pad(v: np.ndarray, ax: int, c: float) -> bool:
+    """Whether the object is under the whole pad centred at ``c`` along axis ``ax`` (its middle
+    and both edges). A slice that only reaches into a part (a tea bag's bag ends 4 mm past its
+    bounding-box centre, then a gap to its tag) puts the pads on a rounded corner, which a pinch
+    rides up onto."""
+    return all(bool((np.abs(v[:, ax] - (c + o)) < 0.002).any()) for o in (-PAD_HALF_WIDTH + 0.002, 0.0, PAD_HALF_WIDTH - 0.002))
 
 
 def grasp_slice(asset, scale, ext) -> GraspSlice:
@@ -290,7 +313,7 @@ def grasp_slice(asset, scale, ext) -> GraspSlice:
         slices = []
         for c in [0.0, *np.linspace(lo + 0.02, hi - 0.02, 15)]:
             sel = np.abs(v[:, ax] - c) < 0.012
-            if sel.sum() >= 10 and np.ptp(v[sel, 1 - ax]) < 0.075:
+            if sel.sum() >= 10 and np.ptp(v[sel, 1 - ax]) < 0.075 and _under_whole_pad(v, ax, c):
                 slices.append((c, v[sel, 2].max(), (v[sel, 1 - ax].max() + v[sel, 1 - ax].min()) / 2, np.ptp(v[sel, 1 - ax])))
         if slices:
             h_max = max(s[1] for s in slices)
@@ -334,7 +357,7 @@ def grasp(ctx: Ctx, obj, tries: int = 3, clearance: float = 0.10, point=None, ya
         g, _, flat = target()
         # a flat object leaves no margin: the TCP must really be at the pinch height before closing
         yield from descend(ctx, g, tol=0.003 if flat else 0.008)
-        yield from close(ctx, obj.entity)
+        yield from close(ctx, obj.entity, gentle=flat)
         if ctx.grasped(obj.entity):
             return True
         ctx.log.append(f"grasp attempt {attempt} failed")
