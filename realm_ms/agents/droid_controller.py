@@ -53,6 +53,12 @@ from realm_ms.agents.arm_model import ArmModel
 from realm_ms.agents.urdf import ARM_JOINTS, DROID_RESET_QPOS
 
 FRANKA_EFFORT_LIMITS = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
+# rad: PhysX ended the last step where the exact step put it (its velocity off the predicted one by
+# at most this over a step): the arm moves freely, and the step's torque may exceed the motor limit
+# (see ``torque``). Measured in free motion on 4 s excitation logs, nominal and with every sysid
+# effect: median 0.6-3e-5, max 2.1e-4; a joint blocked by contact misses by the step's whole motion
+# (estimated ½ a h² at the limit torque: ~1e-3 rad on the shoulder, ~1e-2 on the wrist).
+FREE_MOTION_TOLERANCE = 5e-4
 
 
 # ---------------------------------------------------------------------------- gains and presets
@@ -226,6 +232,8 @@ class DroidArmDriver:
         # closed loop is predicted to react to within the step (a constant load shifts its equilibrium)
         self.plant_prev = torch.zeros(num_envs, model.dof, device=self.device)
         self.within_prev = 0.0  # last step-average torque of the within-step effects (path prediction only)
+        # "exact": the step-average velocity the last step predicted (NaN: unknown, after a reset)
+        self.predicted_velocity = torch.full((num_envs, model.dof), float("nan"), device=self.device)
         self._eye = torch.eye(model.dof, device=self.device)
 
     def _implicit_damping(self, gains: ImpedanceGains) -> torch.Tensor:
@@ -248,6 +256,7 @@ class DroidArmDriver:
         self.applied_torque[idx] = 0.0
         self.velocity_correction[idx] = 0.0
         self.plant_prev[idx] = 0.0
+        self.predicted_velocity[idx] = float("nan")
         if torch.is_tensor(self.within_prev):
             self.within_prev[idx] = 0.0
         self.actuation.reset(self.num_envs, self.device, env_idx, q[:, : self.model.dof])
@@ -352,15 +361,25 @@ class DroidArmDriver:
         else:
             tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
         clamped = torch.clamp(tau, self._neg_effort_limits, self.effort_limits)
-        if exact:
-            # where the law's torque was limited the prediction does not hold: no correction there
-            # (tested before the actuator stages, whose additions enter the next step as plant torque)
-            held = ((clamped - tau).abs() < 1e-4).all(-1, keepdim=True)
-            self.velocity_correction = torch.where(held, v_end - v_avg, 0.0)
         law = clamped
+        if exact:
+            # The exact step's torque is the law's motion over the step folded into one PhysX step, not
+            # the motor's instantaneous torque (the law's ticks are clipped to the limits inside the
+            # prediction): at a new target it can exceed the limit while the 1 kHz motor does not. It is
+            # applied in full while the arm moves as predicted; in contact it is clipped, the prediction
+            # no longer holds there and its velocity correction is dropped. (Tested before the actuator
+            # stages, whose additions enter the next step as plant torque.)
+            limited = ((clamped - tau).abs() >= 1e-4).any(-1, keepdim=True)
+            free = ((qd_held - self.predicted_velocity).abs() * dt <= FREE_MOTION_TOLERANCE).all(-1, keepdim=True)
+            clip = limited & ~free
+            self.velocity_correction = torch.where(clip, 0.0, v_end - v_avg)
+            self.predicted_velocity = v_avg
+            law = torch.where(clip, clamped, tau)
         if act:
             clamped = act.actuator(clamped, state)
         tau = self.motor_torque = clamped
+        if exact:
+            tau = tau + (law - law.clamp(self._neg_effort_limits, self.effort_limits))  # the step's torque beyond the limit
         # joint friction is physics, not command: it acts on the true velocity
         friction = self._neg_friction * torch.tanh(qd / self.joint_physics.friction_velocity)
         tau = tau + limit_dissipative(friction, qd, self.inertia_lower_bound, dt)
@@ -398,9 +417,10 @@ class DroidArmDriver:
         per step: see ``_affine_step_numpy``)."""
         k, cfg = self._numpy_constants(dt), self.config
         n = q.shape[1]
-        state = k["state"]  # float32 [velocity correction, motor, applied, plant_prev torque], as on the torch path
+        # float32 [velocity correction, motor, applied, plant_prev torque, predicted velocity], as on the torch path
+        state = k["state"]
         qd_held, qd = qd, qd + state[:, :n]
-        ext = state[:, 3 * n :]
+        ext = state[:, 3 * n : 4 * n]
         err = q - self.q_target.numpy()
         z = np.concatenate([err, qd, ext, qd_held, q], 1)[..., None]
         if cfg.follows_path:
@@ -418,6 +438,7 @@ class DroidArmDriver:
         # one bound check for all four (the common case: none is exceeded)
         tau = y[:, 3 * n : 4 * n]
         clamped = tau
+        clip = None
         if (np.abs(y[:, : 4 * n]) > k["bounds"]).any():
             off = (np.abs(y[:, 2 * n : 3 * n]) > k["bounds"][2 * n : 3 * n]).any(-1)
             if cfg.follows_path and off.any():  # off the path: re-plan those rows
@@ -430,15 +451,19 @@ class DroidArmDriver:
                 self._saturated_ticks_numpy(y, sat, err, qd, qd_held, ext, terms(), dt)
             lim = k["lim"]
             clamped = np.minimum(np.maximum(tau, -lim), lim)
-            held = (np.abs(clamped - tau) < 1e-4).all(-1)
-            y[~held, 4 * n :] = 0.0  # where the torque was limited the prediction does not hold: no correction
+            limited = (np.abs(clamped - tau) >= 1e-4).any(-1)
+            free = (np.abs(qd_held - state[:, 4 * n :]) * dt <= FREE_MOTION_TOLERANCE).all(-1)
+            clip = limited & ~free  # in contact: clipped, no correction (see ``torque``)
+            y[clip, 4 * n : 5 * n] = 0.0
+        applied = tau if clip is None or not clip.any() else np.where(clip[:, None], clamped, tau)
         friction = k["neg_fric"] * np.tanh(qd * k["inv_fric_v"])
         cap = k["inertia_lb_dt"] * np.abs(qd)
         friction = np.minimum(np.maximum(friction, -cap), cap)
-        state[:, :n] = y[:, 4 * n :]
+        state[:, :n] = y[:, 4 * n : 5 * n]
         state[:, n : 2 * n] = clamped
-        state[:, 2 * n : 3 * n] = out = clamped + friction
-        state[:, 3 * n :] = friction
+        state[:, 2 * n : 3 * n] = out = applied + friction
+        state[:, 3 * n : 4 * n] = friction
+        state[:, 4 * n :] = y[:, 5 * n :]
         k["time"] += dt
         return out
 
@@ -455,12 +480,14 @@ class DroidArmDriver:
                 e, v = e + t * v + 0.5 * t * t * a, v + t * a
             v_avg = (e - err[r]) / dt
             y[r, 3 * n : 4 * n] = mass[r] @ ((v_avg - qd_held[r]) / dt) + bias[r] - ext[r]
-            y[r, 4 * n :] = v - v_avg
+            y[r, 4 * n : 5 * n] = v - v_avg
+            y[r, 5 * n :] = v_avg
 
     def _affine_step_numpy(self, kp, kd, mass, phi, bias, dg, q_ref, q_path, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """The exact step (``_exact_torque`` + feed-forward) as one affine map, batched over the leading
         axis: y = G z + c with z = [q - q*, qd, load, qd_held, q] (5n) and y = [law torque at the step's
-        start, at its end, q - q_path (0 without a path), motor torque, velocity correction] (5n). The closed loop's end
+        start, at its end, q - q_path (0 without a path), motor torque, velocity correction, step-average
+        velocity] (6n). The closed loop's end
         state is x1 = Phi x0 + W load (W = (I - Phi)[:, :n] Kp^-1: the load's equilibrium shift), and
         the feed-forward is g0 + dg (q - q_ref). One matmul per physics step instead of ~60 tiny ops."""
         m, n = kp.shape[:2]
@@ -469,7 +496,7 @@ class DroidArmDriver:
         law = np.concatenate([kp, kd], 2)
         dq = a[:, :n].copy()  # q1 - e = (A_q - [I 0 0]) [e, qd, load]
         dq[:, :, :n] -= eye
-        g = np.zeros((m, 5 * n, 5 * n))
+        g = np.zeros((m, 6 * n, 5 * n))
         g[:, :n, : 2 * n] = -law
         g[:, n : 2 * n, : 3 * n] = -law @ a
         if q_path is not None:
@@ -477,11 +504,13 @@ class DroidArmDriver:
         g[:, 3 * n : 4 * n, : 3 * n] = mass @ dq / (dt * dt)  # M (v_avg - qd_held) / dt + ff - load
         g[:, 3 * n : 4 * n, 2 * n : 3 * n] -= eye
         g[:, 3 * n : 4 * n, 3 * n : 4 * n] = -mass / dt
-        g[:, 4 * n :, : 3 * n] = a[:, n:] - dq / dt  # v1 - v_avg
+        g[:, 4 * n : 5 * n, : 3 * n] = a[:, n:] - dq / dt  # v1 - v_avg
+        g[:, 5 * n :, : 3 * n] = dq / dt  # v_avg
         for i in (0, 1, 3):
             g[:, i * n : (i + 1) * n, 4 * n :] = dg
         c = bias - (dg @ q_ref[..., None])[..., 0]
-        return g, np.concatenate([c, c, np.zeros_like(c) if q_path is None else -q_path, c, np.zeros_like(c)], 1)
+        zero = np.zeros_like(c)
+        return g, np.concatenate([c, c, zero if q_path is None else -q_path, c, zero, zero], 1)
 
     def _numpy_constants(self, dt: float) -> dict:
         if getattr(self, "_np", None) is None:
@@ -497,11 +526,11 @@ class DroidArmDriver:
             k["dt"], k["inertia_lb_dt"] = dt, self.inertia_lower_bound.double().numpy() / dt
             lim = k["lim"]
             k["bounds"] = np.concatenate([lim, lim, np.full_like(lim, self.config.path_tolerance), lim])
-        if k.get("views") is None or k["views"][0] is not self.velocity_correction or k["views"][3] is not self.plant_prev:
-            # one float32 buffer behind the four state tensors (reset() writes them in place)
-            names = ("velocity_correction", "motor_torque", "applied_torque", "plant_prev")
+        names = ("velocity_correction", "motor_torque", "applied_torque", "plant_prev", "predicted_velocity")
+        if k.get("views") is None or any(v is not getattr(self, name) for v, name in zip(k["views"], names)):
+            # one float32 buffer behind the state tensors (reset() writes them in place)
             buf = torch.cat([getattr(self, name).float() for name in names], 1).contiguous()
-            views = torch.chunk(buf, 4, 1)
+            views = torch.chunk(buf, len(names), 1)
             for name, v in zip(names, views):
                 setattr(self, name, v)
             k["views"], k["state"] = views, buf.numpy()
