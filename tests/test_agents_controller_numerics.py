@@ -210,3 +210,24 @@ def test_path_plans_agree_across_backends_with_partial_replans():
         outs.append(np.stack(res))
         assert plans[0] > 48 // 8, plans  # partial re-plans happened
     assert np.abs(outs[0] - outs[1]).max() < 5e-3, np.abs(outs[0] - outs[1]).max()
+
+
+@pytest.mark.parametrize("numpy_path", [True, False])
+def test_an_arm_that_does_not_move_as_predicted_gets_at_most_the_motor_limit(numpy_path):
+    """The exact step's torque may exceed the motor limit only while PhysX follows its prediction
+    (free motion); an arm held in place (contact) after a large target step gets the clipped torque,
+    as a real motor would give it, on both the numpy and the torch path."""
+    from realm_ms.agents.droid_controller import FRANKA_EFFORT_LIMITS
+
+    model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
+    q0 = torch.tensor([HOME], dtype=torch.float32)
+    drv = DroidArmDriver(model, DroidControlConfig(joint_physics="none"), 1)
+    drv.allow_numpy = numpy_path
+    drv.reset(q0)
+    drv.set_target(q0 + 0.6)
+    limits = torch.tensor(FRANKA_EFFORT_LIMITS)
+    peak = torch.zeros(7)
+    for _ in range(16):
+        peak = torch.maximum(peak, drv.torque(q0, torch.zeros_like(q0), 1 / 120)[0].abs())
+    assert (peak <= limits + 1e-3).all(), peak
+    assert (peak >= limits - 1e-3).any(), "the step should saturate the motor"
