@@ -108,3 +108,22 @@ def test_expert_presses_the_switch_on_either_mount(scene):
             assert res["success"], (scene, seed, res["stalled_stage"], res["log"][-3:])
     finally:
         env.close()
+
+
+def test_wall_switch_presses_its_top_end_for_either_goal():
+    """"Turn off" (SB-VRB) starts the switch on with the goal off: on a wall it hangs upside down so the
+    end to press is again the top one, and the detent still holds it at rest."""
+    env = gym.make("REALM-PushSwitch-v1", obs_mode="state", perturbation="SB-VRB")
+    try:
+        env.reset(seed=0)
+        sw = env.unwrapped.main
+        assert sw.mount == "wall" and not sw.goal_on and sw.init_on
+        p0, r = _root_frame(sw)
+        pivot = r.T @ (sw.rocker.pose.p[0].numpy() - p0)
+        assert sw.press_point_local()[2] > pivot[2] + 0.5 * sw.geom.rocker_half[0]
+        a = torch.cat([env.unwrapped.agent.arm_qpos, torch.zeros(1, 1)], 1)
+        for _ in range(10):
+            env.step(a)
+        assert not bool(sw.toggled()[0]) and float(sw.angle()[0]) == pytest.approx(sw.geom.tilt, abs=0.02)
+    finally:
+        env.close()

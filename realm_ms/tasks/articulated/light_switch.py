@@ -14,7 +14,8 @@ Mounting (``?mount=wall|table``, default: the scene's ``switch_mount``):
 - ``wall`` (REALM's Light_Switch): a wall panel stands on the table, its front face at the origin
   plane x = 0 and facing the robot (-x); the switch sits on it in a surface box, its centre
   ``height`` above the table (the scene's ``switch_height``). The rocker's "on" end is its top:
-  pressing the raised top towards the wall (+x) turns it on. Gravity cannot make a detent about
+  pressing the raised top towards the wall (+x) turns it on (for an "off" goal, ``?goal=off``, the
+  switch is mounted upside down, so the end to press is again the top). Gravity cannot make a detent about
   a horizontal axis in a wall by itself, so the rocker's centre of mass is set above its pivot
   (as the table switch has it): the same over-centre detent, the same snap.
 The panel goes ``WallMount.sink`` below the table top (hidden under it), so a switch raised by
@@ -54,7 +55,9 @@ class WallMount:
     """The wall panel a wall switch sits on (root frame: front face at x = 0, table top at z = 0)."""
 
     standoff: float = 0.03  # surface box between the panel and the switch housing (keeps the hand off the wall)
-    panel_half: tuple = (0.02, 0.20, 0.28)  # thickness/2, width/2, height/2 of the panel above the table top
+    # thickness/2, width/2, height/2 of the panel above the table top. 16 cm wide: two switches placed
+    # in a task region (footprints apart) never stand in front of each other's (SB-NOUN adds one)
+    panel_half: tuple = (0.02, 0.08, 0.28)
     sink: float = 0.16  # panel extends this far below the table top (hidden), covering VB-POSE's raise
     panel_rgba: tuple = (0.90, 0.89, 0.86, 1.0)
     box_rgba: tuple = (0.96, 0.96, 0.95, 1.0)
@@ -102,8 +105,10 @@ class LightSwitch(ArticulatedTaskObject):
             raise ValueError(f"light switch mount={self.mount!r}; use one of {MOUNTS} (asset 'articulated/light_switch?mount=wall')")
         self.wall = wall or WallMount()
         self.height = float(height if height is not None else getattr(scene_def, "switch_height", 0.15))
-        # placement keeps the switch's own footprint in the region; the panel is the wall behind it
+        # placement footprint: the switch, and on a wall also the panel's width
         self.footprint_radius = float(np.hypot(g.base_half[0], g.base_half[1]))
+        if self.mount == "wall":
+            self.footprint_radius = max(self.footprint_radius, self.wall.panel_half[1])
         self.mount_pose = self._mount_pose()
         self.art = self._build(env.scene, spec.name)
         self.rocker = self.art.links_map["rocker"]
@@ -114,7 +119,10 @@ class LightSwitch(ArticulatedTaskObject):
         if self.mount == "table":
             return sapien.Pose()
         half = np.sqrt(0.5)  # -90 deg about y: switch +z -> root -x (towards the robot), switch +x -> up
-        return sapien.Pose([-self.wall.standoff, 0.0, self.height], [half, 0.0, -half, 0.0])
+        pose = sapien.Pose([-self.wall.standoff, 0.0, self.height], [half, 0.0, -half, 0.0])
+        # the end to press is the top one: a top-down gripper's upright fingers pressing the lower end
+        # would cover the pivot and block the upper end from coming out (an "off" goal: upside down)
+        return pose if self.goal_on else pose * sapien.Pose(q=[0.0, 0.0, 0.0, 1.0])
 
     def _build(self, scene, name: str):
         g = self.geom
@@ -147,11 +155,12 @@ class LightSwitch(ArticulatedTaskObject):
         box(lb, (0, 0, (g.pivot_height - rz) / 2), (0.008, ry * 0.9, (g.pivot_height - rz) / 2), mat(g.base_rgba, 0.5), collision=False)  # pivot web
         box(lb, (rx * 0.55, 0, g.pivot_height + rz + 0.0005), (rx * 0.3, ry * 0.6, 0.0005), mat(g.on_rgba, 0.4), collision=False)
         if self.mount == "wall":
-            # the plate's mass with its centre straight above the pivot (switch +x is up): gravity's
-            # over-centre detent as on the table, where the plate's own centre of mass lies above it
+            # the plate's mass with its centre straight above the pivot: gravity's over-centre detent
+            # as on the table, where the plate's own centre of mass lies above it
+            up = m.to_transformation_matrix()[:3, :3].T @ np.array([0.0, 0.0, 1.0])  # world up in the rocker frame
             mass = g.rocker_density * 8 * rx * ry * rz
             inertia = [mass / 3 * (ry**2 + rz**2), mass / 3 * (rx**2 + rz**2), mass / 3 * (rx**2 + ry**2)]
-            lb.set_mass_and_inertia(mass, sapien.Pose([g.pivot_height, 0, 0]), inertia)
+            lb.set_mass_and_inertia(mass, sapien.Pose(list(g.pivot_height * up)), inertia)
         ab.initial_pose = sapien.Pose([0, 0, -2.0])
         art = ab.build(name=name, fix_root_link=True)
         # PhysX joint friction is a load-proportional coefficient (SAPIEN defaults it to 0.05): it would

@@ -22,6 +22,7 @@ textures, so it costs no rebuild and changes no physics.
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,7 +82,7 @@ class HouseholdScene(TabletopScene):
         kind, a, b = {"table": self.table_tex, "floor": self.floor_tex, "wall": ("plaster", self.wall_rgb, self.wall_rgb)}[slot]
         own = (tuple(a), tuple(b))
         others = [p for p in PALETTES[kind] if p != own]
-        pick = np.random.default_rng([self.seed, len(slot), ord(slot[0])]).choice(len(others), MATERIAL_VARIANTS - 1, replace=False)
+        pick = np.random.default_rng([self.seed, zlib.crc32(slot.encode())]).choice(len(others), MATERIAL_VARIANTS - 1, replace=False)
         looks = [own] + [others[k] for k in pick]
         return tuple((kind, la, lb, self.seed + 101 * v) for v, (la, lb) in enumerate(looks))
 
@@ -100,14 +101,13 @@ class HouseholdScene(TabletopScene):
         key = f"{kind}/{tuple(a)}/{tuple(b)}/{s}"
         return key, makers[kind], tuple(a) + (1.0,)
 
-    def _mat(self, key: str, spec, roughness=0.6, metallic=0.0):
+    def _mat(self, spec, roughness=0.6, metallic=0.0):
         return tx.textured_material(*self._texture(spec), roughness, metallic)
 
     def on_episode_init(self, env, env_idx) -> None:
         """Draw each slot's look for the sub-envs ``env_idx`` from their episode seeds."""
         if self.materials != "episode":
             return
-        env.scene_looks = getattr(env, "scene_looks", [{} for _ in range(env.num_envs)])
         for i in (int(k) for k in env_idx):
             rng = episode_stream(env, i, f"scene-materials/{self.name}")
             for slot in SLOTS:
@@ -128,12 +128,12 @@ class HouseholdScene(TabletopScene):
         hx, hy, hz = self.table_half_size
         cx, cy = self.table_center_xy
         top, fz = self.table_top_z, self.floor_z
-        slots = {slot: self._mat(slot, self.slot_specs(slot)[0], roughness=r) for slot, r in zip(SLOTS, (0.45, 0.7, 0.95))}
+        slots = {slot: self._mat(self.slot_specs(slot)[0], roughness=r) for slot, r in zip(SLOTS, (0.45, 0.7, 0.95))}
         table_m = slots["table"]
         add_box(b, (hx, hy, hz), sapien.Pose([cx, cy, top - hz]), table_m)
         body_h = (top - 2 * hz - fz) / 2
         if self.table_style == "counter":
-            cab = self._mat("cabinet", ("wood", (0.80, 0.78, 0.74), (0.70, 0.68, 0.64)), roughness=0.5)
+            cab = self._mat(("wood", (0.80, 0.78, 0.74), (0.70, 0.68, 0.64)), roughness=0.5)
             add_box(b, (hx - 0.04, hy, body_h), sapien.Pose([cx + 0.04, cy, fz + body_h]), cab)
             knob = material((0.6, 0.6, 0.62, 1), 0.3, 0.8)
             for k in range(4):
@@ -176,14 +176,14 @@ class HouseholdScene(TabletopScene):
         add_box(b, (0.01, 0.015, 0.25), sapien.Pose([1.56, 1.05, fz + 1.2]), material((0.5, 0.5, 0.52, 1), 0.3, 0.9), collision=False)
 
     def _f_wall_shelf(self, b, fz):
-        wd = self._mat("shelf", ("wood", (0.70, 0.55, 0.38), (0.5, 0.36, 0.22)))
+        wd = self._mat(("wood", (0.70, 0.55, 0.38), (0.5, 0.36, 0.22)))
         for z in (1.45, 1.8):
             add_box(b, (0.12, 0.6, 0.015), sapien.Pose([2.15, -0.4, fz + z]), wd, collision=False)
         for k, rgb in enumerate([(0.8, 0.2, 0.2), (0.2, 0.5, 0.8), (0.9, 0.8, 0.3), (0.3, 0.6, 0.3)]):
             _cyl(b, 0.04, 0.07, sapien.Pose([2.15, -0.8 + 0.25 * k, fz + 1.54]), material(rgb + (1,), 0.5), collision=False)
 
     def _f_chairs(self, b, fz):
-        wd = self._mat("chair", ("wood", (0.55, 0.38, 0.22), (0.38, 0.25, 0.14)))
+        wd = self._mat(("wood", (0.55, 0.38, 0.22), (0.38, 0.25, 0.14)))
         for cy in (-0.95, 0.95):
             add_box(b, (0.2, 0.2, 0.02), sapien.Pose([0.7, cy, fz + 0.45]), wd, collision=False)
             add_box(b, (0.2, 0.02, 0.25), sapien.Pose([0.7, cy + np.sign(cy) * 0.19, fz + 0.72]), wd, collision=False)
@@ -192,7 +192,7 @@ class HouseholdScene(TabletopScene):
                     add_box(b, (0.015, 0.015, 0.22), sapien.Pose([0.7 + sx * 0.17, cy + sy * 0.17, fz + 0.22]), wd, collision=False)
 
     def _f_sideboard(self, b, fz):
-        wd = self._mat("sideboard", ("wood", (0.45, 0.30, 0.18), (0.30, 0.19, 0.10)))
+        wd = self._mat(("wood", (0.45, 0.30, 0.18), (0.30, 0.19, 0.10)))
         add_box(b, (0.22, 0.8, 0.42), sapien.Pose([2.05, -0.6, fz + 0.42]), wd, collision=False)
         _cyl(b, 0.08, 0.12, sapien.Pose([2.05, -0.9, fz + 0.96]), material((0.2, 0.35, 0.6, 1), 0.2), collision=False)
 
@@ -205,7 +205,7 @@ class HouseholdScene(TabletopScene):
             add_box(b, (0.02, 0.025, 0.52), sapien.Pose([2.26, 0.5 + dy, fz + 1.5]), frame, collision=False)
 
     def _f_partitions(self, b, fz):
-        m = self._mat("partition", ("fabric", (0.45, 0.50, 0.56), (0.45, 0.50, 0.56)), roughness=0.95)
+        m = self._mat(("fabric", (0.45, 0.50, 0.56), (0.45, 0.50, 0.56)), roughness=0.95)
         add_box(b, (0.03, 1.2, 0.65), sapien.Pose([1.45, 0.0, fz + 0.65]), m, collision=False)
         add_box(b, (0.8, 0.03, 0.65), sapien.Pose([0.6, 1.25, fz + 0.65]), m, collision=False)
         add_box(b, (0.8, 0.03, 0.65), sapien.Pose([0.6, -1.25, fz + 0.65]), m, collision=False)
@@ -217,7 +217,7 @@ class HouseholdScene(TabletopScene):
             add_box(b, (0.005, 0.06, 0.01), sapien.Pose([0.845, -1.0, fz + z]), material((0.7, 0.7, 0.72, 1), 0.3, 0.9), collision=False)
 
     def _f_sofa(self, b, fz):
-        m = self._mat("sofa", ("fabric", (0.55, 0.22, 0.20), (0.55, 0.22, 0.20)), roughness=0.95)
+        m = self._mat(("fabric", (0.55, 0.22, 0.20), (0.55, 0.22, 0.20)), roughness=0.95)
         add_box(b, (0.45, 1.0, 0.22), sapien.Pose([1.9, -0.3, fz + 0.22]), m, collision=False)
         add_box(b, (0.12, 1.0, 0.45), sapien.Pose([2.25, -0.3, fz + 0.45]), m, collision=False)
 
@@ -233,7 +233,7 @@ class HouseholdScene(TabletopScene):
         _cyl(b, 0.2, 0.15, sapien.Pose([1.8, 1.0, fz + 1.55]), material((0.98, 0.93, 0.8, 1), 0.9), collision=False)
 
     def _f_rug(self, b, fz):
-        add_box(b, (1.2, 1.0, 0.004), sapien.Pose([0.8, 0.0, fz + 0.004]), self._mat("rug", ("fabric", (0.35, 0.38, 0.55), (0.35, 0.38, 0.55)), roughness=1.0), collision=False)
+        add_box(b, (1.2, 1.0, 0.004), sapien.Pose([0.8, 0.0, fz + 0.004]), self._mat(("fabric", (0.35, 0.38, 0.55), (0.35, 0.38, 0.55)), roughness=1.0), collision=False)
 
     # ------------------------------------------------------------------ lighting
     def load_lighting(self, env) -> None:
