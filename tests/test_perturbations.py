@@ -118,6 +118,18 @@ def test_ranges_respected():
     assert all(abs(v["dx"]) <= 0.075 and 0 <= v["dz"] <= 0.15 for v in sw)
 
 
+def test_vsb_nobj_draws_only_objects_a_pinch_can_hold():
+    """StackCubes caps the new object at 5 cm: a toothbrush shrunk that far is a 3.4 mm wide, 2.6 mm
+    tall handle the pads slide over (seed 3 of the 10-seed table). Every side must be >= 5 mm."""
+    from realm_ms.perturbations.common import GRASPABLE_MIN, graspable, object_spec
+
+    assert not graspable([0.05, 0.0035, 0.0052]) and graspable([0.03, 0.03, 0.03])
+    for p in drawn("REALM-StackCubes-v1", "VSB-NOBJ", list(range(40))).record()["params"]:
+        d = p["VSB-NOBJ"]
+        ext = object_spec(d["asset"]).extents * np.asarray(d["scale"])
+        assert ext.min() >= GRASPABLE_MIN and ext.max() <= 0.05 + 1e-9, (d, ext)
+
+
 def test_scene_factors_on_specs():
     from realm_ms.perturbations.common import object_spec
 
