@@ -118,17 +118,17 @@ def grip(ctx: Ctx, value: float, steps: int = 10):
 
 GENTLE_STEP = 0.03  # gripper position per control step when closing gently (~1/4 of full speed)
 GENTLE_SQUEEZE = 0.02  # gripper position past first grasp that a gentle pinch holds (~20 N per pad)
-LIGHT_MASS = 0.1  # kg: objects lighter than this are pinched gently
 
 
 def close(ctx: Ctx, entity=None, max_steps: int = 14, gentle: bool = False):
     """Close until the two-pad grasp holds ``entity`` (plus 3 steps to build force) or timeout.
 
-    ``gentle`` (flat or light objects): close a little per step and, once both pads hold, keep the
-    grip just past that width. Closed at full command the pads squeeze with the drive's saturated
-    force (40-90 N each) and PhysX lets them overlap a light object, then pushes them apart along its
-    shortest way out: a 6 mm tea bag's rounded edge ends up under a pad (the pad rides onto its
-    top), a tapered cone or a chess pawn is squeezed up out of the pinch."""
+    ``gentle`` (every object grasp): close a little per step and, once both pads hold, keep the grip
+    just past that width (~20 N per pad, enough for 2 kg at the pads' friction). Closed at full
+    command the pads squeeze with the drive's saturated force (40-90 N each) and PhysX lets them
+    overlap a light object, then pushes them apart along its shortest way out: a 6 mm tea bag's
+    rounded edge ends up under a pad (the pad rides onto its top), a chess pawn is squeezed up out
+    of the pinch. Drawer handles (no object to hold) are closed at full command."""
     if not gentle:
         ctx.cmd = Target(ctx.cmd.p.copy(), ctx.cmd.yaw, CLOSED)
     held = 0
@@ -261,12 +261,6 @@ def object_geometry(ctx: "Ctx", obj) -> tuple:
     return asset, scale, ext
 
 
-def object_mass(ctx: "Ctx", obj) -> float:
-    """The object's simulated mass in this env (kg): its model and scale, B-HOBJ's draw included."""
-    bodies = obj.entity._bodies
-    return float(bodies[ctx.i if len(bodies) > 1 else 0].mass)
-
-
 def scaled_vertices(asset, scale, samples: int = 3000) -> np.ndarray | None:
     """Points of the collision mesh's surface in the object frame, at the object's scale: its
     vertices plus ``samples`` points spread over its faces (a low-poly cylinder has vertices only at
@@ -365,7 +359,7 @@ def grasp(ctx: Ctx, obj, tries: int = 3, clearance: float = 0.10, point=None, ya
         g, _, flat = target()
         # a flat object leaves no margin: the TCP must really be at the pinch height before closing
         yield from descend(ctx, g, tol=0.003 if flat else 0.008)
-        yield from close(ctx, obj.entity, gentle=flat or object_mass(ctx, obj) < LIGHT_MASS)
+        yield from close(ctx, obj.entity, gentle=True)
         if ctx.grasped(obj.entity):
             return True
         ctx.log.append(f"grasp attempt {attempt} failed")
