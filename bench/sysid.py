@@ -56,6 +56,17 @@ def run_sweep(args) -> int:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     finished: list[dict] = []
+    if out.exists() and not args.fresh:  # resume: the cases an earlier run of the same sweep finished
+        old = json.loads(out.read_text())
+        same = old.get("summary", {}).get("engine") == args.engine and old["summary"].get("noise_rad") == args.noise
+        if not same:
+            raise SystemExit(f"{out} holds a sweep with other settings ({old.get('summary')}); pass --fresh to overwrite it "
+                             "or choose another --out")
+        fields = set(CaseResult.__dataclass_fields__)
+        finished = [{k: v for k, v in r.items() if k in fields} for r in old["rows"]
+                    if r["effect"] in (*effects, "none") and r["seed"] in seeds]
+        print(f"resuming {out}: {len(finished)} case(s) done", file=sys.stderr)
+    earlier = [CaseResult(**r) for r in finished]
 
     def write(rows, failed, complete: bool) -> str:
         wall = time.perf_counter() - t0
@@ -76,7 +87,7 @@ def run_sweep(args) -> int:
         finished.append(r)
         write(judge([CaseResult(**x) for x in finished if "error" not in x]), [x for x in finished if "error" in x], False)
 
-    rows, failed = sweep(effects, seeds, args.engine, args.noise, args.jobs, on_row=done)
+    rows, failed = sweep(effects, seeds, args.engine, args.noise, args.jobs, on_row=done, done=earlier)
     table = write(rows, failed, True)
     print(table)
     print(f"{sum(bool(r.passed) for r in rows)}/{len(rows) + len(failed)} pass in {time.perf_counter() - t0:.0f} s; "
@@ -97,6 +108,7 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=None, help="--sweep: parallel cases (default: all cores)")
     ap.add_argument("--seeds", default="0,1,2", help="--sweep: comma-separated seeds")
     ap.add_argument("--effects", default=None, help="--sweep: comma-separated effects (default: the 8 of the sweep)")
+    ap.add_argument("--fresh", action="store_true", help="--sweep: ignore the cases an earlier run left in --out")
     args = ap.parse_args()
     if args.sweep:
         return run_sweep(args)

@@ -31,3 +31,12 @@ def test_null_case_fails_when_it_names_an_effect_or_is_unexplained():
     assert not judge([_row("none", found=False, unexplained=True)])[0].passed
     # without a null row for the seed the noise floor is the floor
     assert judge([_row("latency", seed=5, floor=2e-4, after=2.9e-4)])[0].passed
+
+
+def test_sweep_resumes_without_the_cases_it_finished_and_runs_seed_by_seed():
+    from realm_ms.sysid.sweep import sweep_cases
+
+    todo = sweep_cases(("latency", "armature"), (0, 1), "mujoco", 1e-4)
+    assert [c[:2] for c in todo] == [("none", 0), ("none", 1), ("latency", 0), ("armature", 0), ("latency", 1), ("armature", 1)]
+    left = sweep_cases(("latency", "armature"), (0, 1), "mujoco", 1e-4, [_row("none", 0), _row("latency", 0)])
+    assert [c[:2] for c in left] == [("none", 1), ("armature", 0), ("latency", 1), ("armature", 1)]

@@ -112,16 +112,25 @@ def _case(args) -> dict:
         return {"effect": effect, "seed": seed, "error": f"{type(e).__name__}: {e}"}
 
 
+def sweep_cases(effects, seeds, engine: str, noise_rad: float, done: list[CaseResult] = ()) -> list[tuple]:
+    """(effect, seed, engine, noise) still to run: the null cases first (they set the floors), then
+    seed by seed, so a run cut off short has every effect on the first seeds rather than every seed
+    of the first effects; cases in ``done`` are left out."""
+    have = {(r.effect, r.seed) for r in done}
+    cases = [("none", s) for s in seeds] + [(e, s) for s in seeds for e in effects]
+    return [(e, s, engine, noise_rad) for e, s in cases if (e, s) not in have]
+
+
 def sweep(effects=SWEEP_EFFECTS, seeds=(0, 1, 2), engine: str = "mujoco", noise_rad: float = 1e-4,
-          jobs: int | None = None, on_row=None) -> tuple[list[CaseResult], list[dict]]:
+          jobs: int | None = None, on_row=None, done: list[CaseResult] = ()) -> tuple[list[CaseResult], list[dict]]:
     """All (effect, seed) cases plus the null case per seed, ``jobs`` processes (default: all cores).
-    Returns (judged rows, failed cases)."""
+    ``done``: rows of an earlier, cut-off run of the same sweep; their cases are not run again.
+    Returns (judged rows, ``done`` included; failed cases)."""
     import multiprocessing as mp
 
-    # the null cases first: they set the floors, so a run cut off short still judges what it finished
-    cases = [("none", s, engine, noise_rad) for s in seeds] + [(e, s, engine, noise_rad) for e in effects for s in seeds]
-    jobs = max(1, min(jobs or os.cpu_count() or 1, len(cases)))
-    rows, failed = [], []
+    cases = sweep_cases(effects, seeds, engine, noise_rad, done)
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(cases) or 1))
+    rows, failed = list(done), []
     # spawn: PhysX and torch thread pools do not survive fork
     with mp.get_context("spawn").Pool(jobs, maxtasksperchild=1) as pool:
         for out in pool.imap_unordered(_case, cases):
