@@ -11,7 +11,7 @@ gym = pytest.importorskip("gymnasium")
 pytest.importorskip("mani_skill")
 
 import realm_ms  # noqa: E402,F401
-from realm_ms.expert import SKILLS, make_expert, run_episode  # noqa: E402
+from realm_ms.expert import SKILLS, make_expert, run_episode, start_episode  # noqa: E402
 from realm_ms.expert.ik import ArmIK, top_down_rotation  # noqa: E402
 from realm_ms.expert.primitives import grasp_height, grasp_slice, pad_below_tcp  # noqa: E402
 from realm_ms.tasks import TASKS  # noqa: E402
@@ -134,12 +134,8 @@ def test_expert_rotates_a_tea_bag():
 def _expert_trajectory(env, seed: int, steps: int, expert=None):
     """(robot qpos, main object pose) per step of the expert's episode ``seed`` on ``env``; the
     expert is reused (``reset()``) when given, as the evaluation runner does."""
-    obs, _ = env.reset(seed=seed)
+    obs, expert = start_episode(env, seed, expert)
     u = env.unwrapped
-    if expert is None:
-        expert = make_expert(u)
-    else:
-        expert.reset()
     out = []
     for _ in range(steps):
         obs, *_ = env.step(expert.act(obs))

@@ -4,5 +4,5 @@
     res = run_episode(env, seed=0)   # {'progression', 'success', 'stalled_stage', 'steps', 'log'}
 """
 
-from realm_ms.expert.core import Expert, make_expert, run_episode  # noqa: F401
+from realm_ms.expert.core import Expert, make_expert, run_episode, start_episode  # noqa: F401
 from realm_ms.expert.skills import SKILLS  # noqa: F401

@@ -85,6 +85,16 @@ def make_expert(env, skill: str | None = None, **kw) -> Expert:
     return Expert(env, skill=skill, **kw)
 
 
+def start_episode(env, seed: int, expert: Expert | None = None) -> tuple:
+    """Reset ``env`` with ``seed`` and return (obs, expert): a new expert, or ``expert`` reset for the
+    new episode, as the evaluation runner reuses one."""
+    obs, _ = env.reset(seed=seed)
+    if expert is None:
+        return obs, make_expert(env.unwrapped)
+    expert.reset()
+    return obs, expert
+
+
 def run_episode(env, seed: int, max_steps: int | None = None, expert: Expert | None = None, on_step=None) -> dict:
     """Reset ``env`` (num_envs = 1) with ``seed`` and run the expert until the episode ends.
 
@@ -92,12 +102,8 @@ def run_episode(env, seed: int, max_steps: int | None = None, expert: Expert | N
     evaluation, the expert bench and ``realm demo`` run episodes through ``realm_ms.eval.runner``.
 
     Returns ``dict(progression, success, stalled_stage, steps, log)``."""
-    obs, _ = env.reset(seed=seed)
+    obs, expert = start_episode(env, seed, expert)
     u = env.unwrapped
-    if expert is None:
-        expert = make_expert(u)
-    else:
-        expert.reset()
     horizon = max_steps or u.task_spec.horizon
     best, steps, info = 0.0, 0, {}
     for steps in range(1, horizon + 1):
