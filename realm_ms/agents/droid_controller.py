@@ -231,7 +231,8 @@ class DroidArmDriver:
         # "exact": last step's torques beyond the motor's (joint friction, plant effects), which the
         # closed loop is predicted to react to within the step (a constant load shifts its equilibrium)
         self.plant_prev = torch.zeros(num_envs, model.dof, device=self.device)
-        self.within_prev = 0.0  # last step-average torque of the within-step effects (path prediction only)
+        # last step-average torque of the within-step effects (path prediction only)
+        self.within_prev = torch.zeros(num_envs, model.dof, device=self.device)
         # "exact": the step-average velocity the last step predicted (NaN: unknown, after a reset)
         self.predicted_velocity = torch.full((num_envs, model.dof), float("nan"), device=self.device)
         self._eye = torch.eye(model.dof, device=self.device)
@@ -257,8 +258,7 @@ class DroidArmDriver:
         self.velocity_correction[idx] = 0.0
         self.plant_prev[idx] = 0.0
         self.predicted_velocity[idx] = float("nan")
-        if torch.is_tensor(self.within_prev):
-            self.within_prev[idx] = 0.0
+        self.within_prev[idx] = 0.0
         self.actuation.reset(self.num_envs, self.device, env_idx, q[:, : self.model.dof])
 
     def set_target(self, q_target: torch.Tensor) -> None:
@@ -361,7 +361,7 @@ class DroidArmDriver:
         else:
             tau = (kp @ (q_t - q_m)[..., None] - kd @ qd_m[..., None])[..., 0] + bias
         clamped = torch.clamp(tau, self._neg_effort_limits, self.effort_limits)
-        law = clamped
+        law, excess = clamped, None
         if exact:
             # The exact step's torque is the law's motion over the step folded into one PhysX step, not
             # the motor's instantaneous torque (the law's ticks are clipped to the limits inside the
@@ -374,12 +374,13 @@ class DroidArmDriver:
             clip = limited & ~free
             self.velocity_correction = torch.where(clip, 0.0, v_end - v_avg)
             self.predicted_velocity = v_avg
-            law = torch.where(clip, clamped, tau)
+            excess = torch.where(clip, 0.0, tau - clamped)  # the step's torque beyond the limit
+            law = clamped + excess
         if act:
             clamped = act.actuator(clamped, state)
         tau = self.motor_torque = clamped
-        if exact:
-            tau = tau + (law - law.clamp(self._neg_effort_limits, self.effort_limits))  # the step's torque beyond the limit
+        if excess is not None:
+            tau = tau + excess
         # joint friction is physics, not command: it acts on the true velocity
         friction = self._neg_friction * torch.tanh(qd / self.joint_physics.friction_velocity)
         tau = tau + limit_dissipative(friction, qd, self.inertia_lower_bound, dt)
@@ -394,7 +395,7 @@ class DroidArmDriver:
         if exact:
             # all but the law's own torque (actuator stages included) and what the step predicted itself
             self.plant_prev = tau - law if f_step is None else tau - law - f_step
-            self.within_prev = 0.0 if f_step is None else f_step
+            self.within_prev = f_step if f_step is not None else self.within_prev.zero_()
         self.time = self.time + dt
         # the implicit drive will apply about -d*qd; pre-compensate so the total matches the law
         return tau + self.implicit_damping * qd if self.config.integrator == "implicit_damping" else tau
