@@ -94,3 +94,30 @@ def test_rgb_env_tiny(env_id):
             assert rgb.float().std() > 1.0, f"{uid} renders a flat image"
     finally:
         env.close()
+
+
+def test_place_into_counts_a_tall_object_resting_in_the_bowl():
+    """PLACE_INTO is REALM's Inside or OnTop: a 12 cm glass set down in a 7 cm bowl rests on its
+    curved walls with its centre above the inside band, and still counts; where it stands on the
+    table, or hovers over the bowl without touching it, it does not."""
+    from realm_ms.tasks.objects import RigidTaskObject
+
+    env = gym.make("REALM-PutGreenBlockInBowl-v1", obs_mode="state")
+    env.reset(seed=0)
+    u = env.unwrapped
+    bowl, glass = u.target, u.objects["water_glass"]
+    assert isinstance(glass, RigidTaskObject) and glass.extents[2] > bowl.extents[2] + 0.04
+    for _ in range(5):
+        env.step(hold_action(env))
+    assert not bowl.holds(glass, u.scene).any()  # on the table where it spawned
+
+    above = bowl.pose.p + torch.tensor([0.0, 0.0, bowl.extents[2] + 0.05])
+    glass.set_pose(above, torch.zeros(1))
+    assert not bowl.holds(glass, u.scene).any()  # over the bowl, touching nothing
+
+    glass.set_pose(bowl.pose.p + torch.tensor([0.0, 0.0, 0.05]), torch.zeros(1))
+    for _ in range(20):  # it drops onto the bowl's walls and settles
+        env.step(hold_action(env))
+    assert not bowl.contains(glass).any()  # its centre is above the rim + 2 cm band...
+    assert bowl.holds(glass, u.scene).all()  # ...but it rests on the bowl
+    env.close()

@@ -83,7 +83,7 @@ class TrajectoryQuality:
         u = self.u
         if u.target is None:
             return False
-        return bool(u.target.contains(u.main)[0]) or bool(u.target.supports(u.main, u.scene)[0])
+        return bool(u.target.holds(u.main, u.scene)[0]) or bool(u.target.supports(u.main, u.scene)[0])
 
     def summary(self) -> dict:
         q = np.asarray(self.q)

@@ -312,7 +312,7 @@ class RealmEnv(BaseEnv):
         if self.target is not None:
             target = self.target
             x.target_pos = target.anchor_pos
-            x.placed_into = lambda: target.contains(main)
+            x.placed_into = lambda: target.holds(main, self.scene)
             x.placed_onto = lambda: target.supports(main, self.scene)
         if main.is_articulated:
             x.openness, x.openness0 = main.openness, self._openness0

@@ -20,6 +20,10 @@ from realm_ms.registry import Registry
 from mani_skill.utils.geometry.rotation_conversions import quaternion_apply, quaternion_to_matrix
 from realm_ms.tasks.task_spec import SceneObject
 
+# m: a bottom this far above a receptacle's base is on it, not on the table beside it (both settle
+# within ~2 mm of the table)
+ABOVE_BASE = 0.004
+
 # asset prefix -> builder(env, SceneObject) -> task object (articulated objects register here)
 OBJECT_BUILDERS: Registry[Callable] = Registry("object builder")
 
@@ -126,6 +130,19 @@ class RigidTaskObject(TaskObject):
         half = self._extents[:, :2].to(local) / 2 - margin
         inside_xy = (local[:, :2].abs() < half).all(dim=1)
         return inside_xy & (local[:, 2] > -0.01) & (local[:, 2] < self._extents[:, 2].to(local) + 0.02)
+
+    def holds(self, other: "TaskObject", scene, margin: float = 0.01) -> torch.Tensor:
+        """REALM's PLACE_INTO test: ``other`` is inside this receptacle (``contains``) or rests on it
+        (OmniGibson's ``OnTop``: touching it, with nothing of it under ``other``'s centre: the centre
+        over this object's footprint, the bottom above its base). A 12 cm glass standing in a 7 cm
+        bowl rests 3 cm up the bowl's walls, its centre above ``contains``' band: it is OnTop."""
+        local = self._to_local(other.anchor_pos())
+        half = self._extents[:, :2].to(local) / 2 - margin
+        over = (local[:, :2].abs() < half).all(dim=1) & (self._to_local(other.pose.p)[:, 2] > ABOVE_BASE)
+        inside = self.contains(other, margin)
+        if not bool((over & ~inside).any()):  # the contact query walks every contact on CPU: skip it
+            return inside
+        return inside | (over & any_contact(scene, [self.entity], other.touch_entities()).to(over.device))
 
     def supports(self, other: "TaskObject", scene, tol: float = 0.015) -> torch.Tensor:
         """``other`` rests on this object's top face: footprint, bottom at the top height, contact."""

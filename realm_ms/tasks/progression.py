@@ -10,7 +10,10 @@ with the original's pitfalls fixed (section 10):
   0.025 of its range (the original's open-task condition was true at rest);
 - REACH for drawers uses the handle like every other task uses its object (distance < 0.10 m or
   touching), instead of the original's dead touch-only branch;
-- PLACE_INTO / PLACE_ONTO are geometric (footprint + height band + contact), not sim object states.
+- PLACE_INTO / PLACE_ONTO are geometric, not sim object states. PLACE_INTO is REALM's
+  ``Inside or OnTop``: the object's centre inside the receptacle (footprint, below the rim + 2 cm),
+  or the object resting on it (touching, centre over its footprint, bottom above its base: a tall
+  glass standing in a bowl). PLACE_ONTO: bottom on the top face, over its footprint, touching.
 """
 
 from __future__ import annotations

@@ -55,5 +55,8 @@ class ArticulatedTaskObject(TaskObject):
     def contains(self, other, margin: float = 0.01) -> torch.Tensor:
         return torch.zeros(self.env.num_envs, dtype=torch.bool, device=self.device)
 
+    def holds(self, other, scene, margin: float = 0.01) -> torch.Tensor:
+        return self.contains(other, margin)
+
     def supports(self, other, scene, tol: float = 0.015) -> torch.Tensor:
         return torch.zeros(self.env.num_envs, dtype=torch.bool, device=self.device)
