@@ -37,3 +37,15 @@ def test_same_seed_same_layout_and_different_seeds_differ():
 def test_impossible_layout_is_a_clear_error():
     with pytest.raises(PlacementError, match="enlarge the spawn region"):
         sample_placements(_rngs(1), [0.2, 0.2], [(0.4, 0.6, -0.1, 0.1)] * 2, [(0, 0)] * 2)
+
+
+def test_reach_keeps_an_object_near_the_robot():
+    """An object given a reach spawns within it of the base (the corners of REALM's regions are out
+    of the arm's top-down reach); the others still use the whole region."""
+    region = (0.30, 0.82, -0.40, 0.40)
+    xy, _ = sample_placements(_rngs(200), [0.03, 0.03], [region] * 2, [(0, 0)] * 2, 0.01, reach=[0.78, None])
+    d = np.linalg.norm(xy, axis=-1)
+    assert d[:, 0].max() <= 0.78
+    assert d[:, 1].max() > 0.78  # the unrestricted one does reach the corners
+    with pytest.raises(PlacementError, match="within 0.2 m of the robot"):
+        sample_placements(_rngs(1), [0.03], [region], [(0, 0)], reach=[0.2])

@@ -235,6 +235,8 @@ class RealmEnv(BaseEnv):
                 yaw_ranges=[o.yaw for o in movable],
                 min_separation=spec.min_separation,
                 obstacles=[(o.pose[0], o.pose[1], self.objects[o.name].footprint_radius) for o in spec.by_role("fixture")],
+                # articulated mains place by their body, their handle's reach is set by their region
+                reach=[spec.reach if o.role in ("main", "target") and not self.objects[o.name].is_articulated else None for o in movable],
             )
             for k, o in enumerate(movable):
                 obj = self.objects[o.name]

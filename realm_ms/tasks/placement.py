@@ -23,9 +23,12 @@ def sample_placements(
     yaw_ranges: list[tuple[float, float]],
     min_separation: float = 0.05,
     obstacles: list[tuple[float, float, float]] = (),
+    reach: list[float | None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Returns xy (B, K, 2) and yaw (B, K). Objects are placed largest first, clear of each other
-    and of ``obstacles`` (x, y, radius): fixtures that stay where they are."""
+    and of ``obstacles`` (x, y, radius): fixtures that stay where they are. ``reach[i]`` (m, None:
+    anywhere in its region) keeps object i's centre that close to the robot base at the origin."""
+    reach = list(reach) if reach is not None else [None] * len(radii)
     b, k = len(rngs), len(radii)
     xy = np.zeros((b, k, 2))
     yaw = np.zeros((b, k))
@@ -33,7 +36,7 @@ def sample_placements(
     for e, rng in enumerate(rngs):
         for restart in range(MAX_RESTARTS + 1):
             # greedy placement can corner itself (a large object in the middle); start the layout over
-            if _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, obstacles, last=restart == MAX_RESTARTS):
+            if _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, obstacles, reach, last=restart == MAX_RESTARTS):
                 break
     return xy, yaw
 
@@ -41,7 +44,7 @@ def sample_placements(
 MAX_RESTARTS = 20
 
 
-def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, obstacles, last: bool) -> bool:
+def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separation, obstacles, reach, last: bool) -> bool:
     placed: list[int] = []
     fixed = [(np.array([x, y]), r) for x, y, r in obstacles]
     tries = MAX_TRIES if last else MAX_TRIES // 10
@@ -52,6 +55,8 @@ def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separatio
         hi = np.array([max(x1 - r, x0 + r), max(y1 - r, y0 + r)])
         for _ in range(tries):
             p = lo + (hi - lo) * rng.uniform(0, 1, size=2)
+            if reach[i] is not None and np.linalg.norm(p) > reach[i]:
+                continue
             if all(np.linalg.norm(p - xy[e, j]) >= r + radii[j] + min_separation for j in placed) and all(
                 np.linalg.norm(p - c) >= r + rc + min_separation for c, rc in fixed
             ):
@@ -60,8 +65,9 @@ def _place_env(rng, e, xy, yaw, order, radii, regions, yaw_ranges, min_separatio
             if not last:
                 return False
             raise PlacementError(
-                f"could not place object {i} (radius {r:.3f} m) without collision in region {regions[i]} after "
-                f"{MAX_RESTARTS} restarts; enlarge the spawn region or use fewer/smaller objects"
+                f"could not place object {i} (radius {r:.3f} m) without collision in region {regions[i]}"
+                + (f" within {reach[i]} m of the robot" if reach[i] is not None else "")
+                + f" after {MAX_RESTARTS} restarts; enlarge the spawn region or use fewer/smaller objects"
             )
         xy[e, i] = p
         placed.append(i)

@@ -64,6 +64,9 @@ class TaskSpec:
     cameras: tuple[CameraSpec, ...] = DEFAULT_CAMERAS
     horizon: int = 800  # control steps (REALM paper: 800 = 53 s at 15 Hz)
     min_separation: float = 0.05  # m between placed objects' bounding circles
+    # m from the robot base: a rigid main object and target spawn within the arm's top-down reach
+    # over the table (REALM's regions reach 0.9 m into the corners; a bottle at 0.85 m is out of reach)
+    reach: float = 0.78
     description: str = ""
     extra: dict = field(default_factory=dict)
 
