@@ -11,11 +11,8 @@ setup:
 demo: setup
 	$(PY) -m realm_ms.cli demo
 
-# the render module runs in its own process: after ~600 tests in one process, lavapipe has
-# segfaulted in its first render (alone it passes; see tests/test_rendering.py)
 test: setup
-	$(PY) -m pytest -q --ignore=tests/test_rendering.py
-	$(PY) -m pytest -q tests/test_rendering.py
+	$(PY) -m pytest -q
 
 test-slow: setup
 	$(PY) -m pytest -q -m slow --run-slow
