@@ -35,6 +35,7 @@ CONTRAST_TOL = (0.75, 1.33)
 ATTEMPTS = 3
 _CHILD = """
 import json, sys, warnings
+import gymnasium as gym
 import numpy as np
 import realm_ms
 from realm_ms import rendering
