@@ -165,8 +165,8 @@ def test_episode_is_the_same_fresh_or_after_another(env_id, perturbation, before
 
 def test_put_sets_the_object_down_instead_of_dropping_it():
     """Let go over the receptacle, the object does not fall: the expert lowers it until it touches.
-    A 12 cm water glass (SB-NOUN) dropped from 2 cm over the bowl's rim landed at ~0.6 m/s and came
-    to rest tilted, or tipped light bowls."""
+    A 12 cm water glass (SB-NOUN) dropped from 2 cm over the bowl's rim landed at ~1 m/s and came
+    to rest tilted."""
     env = gym.make("REALM-PutGreenBlockInBowl-v1", perturbation="SB-NOUN", obs_mode="state")
     falls = []
 

@@ -44,9 +44,10 @@ def set_down(ctx, obj, target, floor: float):
     over. ``floor`` keeps the pads clear of the receptacle (``hand_floor``): pads lowered into a bowl
     beside an apple caught its wall as they opened and threw bowl and apple off the table."""
     step = SET_DOWN_SPEED / CONTROL_HZ
-    touching = (obj.touch_entities(), target.touch_entities())
+    # the object or the hand against the receptacle, in one walk over the contacts
+    mover, receptacle = [*obj.touch_entities(), *ctx.env.agent.gripper_links], target.touch_entities()
     while ctx.cmd.p[2] - step > floor:
-        if bool(any_contact(ctx.env.scene, *touching)[ctx.i]) or bool(ctx.env.agent.is_touching(touching[1])[ctx.i]):
+        if bool(any_contact(ctx.env.scene, mover, receptacle)[ctx.i]):
             return
         if ctx.cmd.p[2] < ctx.tcp()[2] - BLOCKED:
             return
