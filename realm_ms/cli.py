@@ -14,16 +14,16 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Iterable
 
 from realm_ms.errors import UserError  # noqa: F401  (re-exported: raised by every command module)
 
-# subcommand name -> module providing add_parser(); later areas append here.
 # subcommand -> (module providing add_parser(), one-line help shown by `realm --help`). Only the
 # module of the command being run is imported: `realm --help` imports none of them.
 COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": ("realm_ms.demo", "run the scripted expert on REALM tasks; write videos + a progression table"),
+    "demo": ("realm_ms.demo", "quick protocol run: the expert and a tiny LeRobot policy through `realm eval`, ending in an HTML index"),
     "sysid": ("realm_ms.sysid.cli", "system identification: compare, diagnose, fit, report"),
     "assets": ("realm_ms.assets.cli", "build and inspect the object catalog"),
     "perturbations": ("realm_ms.perturbations.cli", "REALM's perturbations: list them, render a contact sheet"),
@@ -39,8 +39,13 @@ def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
     others a placeholder that only lists them."""
     from realm_ms import __version__
 
-    parser = argparse.ArgumentParser(prog="realm", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="realm", description="realm-ms: the REALM generalization benchmark on ManiSkill3 (evaluate policies, export "
+        "LeRobot datasets, perturbations, assets) and a system-identification workbench for the DROID robot.",
+        epilog="`realm COMMAND --help` for a command's options; README.md for set-up and examples.")
     parser.add_argument("--version", action="version", version=f"realm-ms {__version__}")
+    parser.add_argument("--verbose", action="store_true",
+                        help="show every third-party warning (sets REALM_MS_VERBOSE=1, which worker processes inherit)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     load = set(COMMANDS) if load is None else set(load)
     for name, (module, help_text) in COMMANDS.items():
@@ -80,6 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    if args.verbose:
+        os.environ["REALM_MS_VERBOSE"] = "1"
     from realm_ms.validate import InputError
 
     if getattr(args, "needs_envs", True):

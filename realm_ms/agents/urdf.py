@@ -42,7 +42,7 @@ __all__ = [
     "render_urdf_text",
 ]
 
-_RENDER_VERSION = "1"  # bump when the rendering logic changes (invalidates caches)
+_RENDER_VERSION = "2"  # bump when the rendering logic changes (invalidates caches)
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 #: DROID's reset pose of the arm (rad): every task's default start, the controller's reference, excitation home
@@ -104,6 +104,10 @@ def _arm_xml() -> tuple[str, str]:
                 fn = mesh.get("filename")
                 if fn and not os.path.isabs(fn):
                     mesh.set("filename", str((src.parent / fn).resolve()))
+            for mesh in (m for c in el.iter("collision") for m in c.iter("mesh")):
+                fn = Path(mesh.get("filename", ""))
+                if fn.suffix.lower() == ".stl":
+                    mesh.set("filename", str(collision_obj_dir(fn.parent) / (fn.stem + ".obj")))
             parts.append(el)
         elif el.tag == "joint" and el.get("name") in _KEEP_ARM_JOINTS:
             parts.append(el)
@@ -127,9 +131,26 @@ def _arm_xml() -> tuple[str, str]:
     return arm, srdf_pairs
 
 
+@functools.lru_cache(maxsize=None)
+def collision_obj_dir(src: Path) -> Path:
+    """The STL meshes of ``src`` copied as OBJ (same vertices and faces) under the cache. The agent
+    loads collision files as multiple convex parts, which SAPIEN supports for OBJ and warns about
+    (once per file and env) for STL; an STL holds one part, so the collision shapes are the same."""
+    import trimesh
+
+    out = cache_dir() / "collision_obj" / f"{src.name}_{hashlib.sha256(str(src).encode()).hexdigest()[:8]}"
+    for stl in sorted(src.glob("*.stl")):
+        obj = out / (stl.stem + ".obj")
+        if not obj.is_file():
+            mesh = trimesh.load(stl, process=False, force="mesh")
+            _atomic_write(obj, trimesh.exchange.obj.export_obj(mesh, include_normals=False, digits=9))
+    return out
+
+
 def _gripper_xml(parent: str) -> str:
     """The template's <robot> children (links/joints/comments) with the placeholders substituted."""
-    text = Template(_GRIPPER_TEMPLATE.read_text()).substitute(PARENT=parent, MESH=str(robotiq_mesh_dir()))
+    text = Template(_GRIPPER_TEMPLATE.read_text()).substitute(PARENT=parent, MESH=str(robotiq_mesh_dir()),
+                                                             COLLISION=str(collision_obj_dir(robotiq_mesh_dir())))
     start = text.index(">", text.index("<robot")) + 1
     return text[start : text.rindex("</robot>")].strip("\n")
 

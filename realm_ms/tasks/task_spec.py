@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.urdf import DROID_RESET_QPOS
+from realm_ms.registration import HORIZON
 from realm_ms.registry import Registry
 from realm_ms.tasks.skills import Skill, as_skill
 
@@ -62,7 +63,7 @@ class TaskSpec:
     spawn_region: tuple[float, float, float, float] = (0.35, 0.75, -0.30, 0.30)  # REALM: ~40 x 60 cm
     init_qpos: tuple[float, ...] = DROID_RESET_QPOS
     cameras: tuple[CameraSpec, ...] = DEFAULT_CAMERAS
-    horizon: int = 800  # control steps (REALM paper: 800 = 53 s at 15 Hz)
+    horizon: int = HORIZON  # control steps (REALM paper: 800 = 53 s at 15 Hz)
     min_separation: float = 0.05  # m between placed objects' bounding circles
     # m from the robot base: a rigid main object and target spawn within the arm's top-down reach
     # over the table (REALM's regions reach 0.9 m into the corners; a bottle at 0.85 m is out of reach)
