@@ -1,7 +1,7 @@
 """Scripted-expert success table: REALM tasks x perturbations x N seeds, through `realm eval`'s runner.
 
     .venv/bin/python bench/expert_success.py [--seeds 20] [--tasks ID ...] [--perturbation NAME|all]
-        [--workers N] [--max-steps 800] [--out outputs/expert_success]
+        [--workers N] [--max-steps 800] [--action-space SPACE[:GRIPPER]] [--out outputs/expert_success]
 
 Runs the privileged expert (CPU physics, state obs: nothing is rendered) with the same episode
 loop, records and resume as ``realm eval --policy expert``: every finished episode is appended to
@@ -102,6 +102,8 @@ def main(argv=None) -> int:
     ap.add_argument("--max-steps", type=int, default=800)
     ap.add_argument("--threshold", type=float, default=0.8, help="success rate a cell must reach (listed when below)")
     ap.add_argument("--out", default="outputs/expert_success", help="run directory; re-run with the same one to resume")
+    ap.add_argument("--action-space", default="joint_position", help="DROID action space the expert drives: joint_position | "
+                    "joint_velocity | cartesian_velocity | cartesian_position, optionally :position or :velocity for the gripper")
     args = ap.parse_args(argv)
 
     import realm_ms  # noqa: F401
@@ -121,7 +123,10 @@ def main(argv=None) -> int:
             raise UserError(f"unknown task(s) {unknown}; known: {sorted(TASKS)}")
         perts = available_perturbations() if args.perturbation == "all" else [canonical_perturbation(p.strip()) for p in args.perturbation.split(",")]
         proto = PRESETS["realm"].with_overrides(episodes=args.seeds, seed=0, max_steps=args.max_steps)
-        evaluate("expert", tasks, perts, proto, out, workers=args.workers, quiet=False)
+        from realm_ms.agents.droid_action_spaces import parse_action_space_flag
+
+        env_kwargs = parse_action_space_flag(args.action_space)
+        evaluate("expert", tasks, perts, proto, out, workers=args.workers, quiet=False, env_kwargs=env_kwargs)
     except (UserError, ValueError) as e:
         print(f"expert_success: error: {e}", file=sys.stderr)
         return 2

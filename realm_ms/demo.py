@@ -4,7 +4,8 @@ Two policies through ``realm eval``'s runner on a few tasks and perturbations: t
 (privileged, solves the tasks) and a tiny randomly initialised LeRobot ACT policy made locally
 (``save_pretrained`` then loaded back by path: the LeRobot path end to end, no download). Writes
 ``OUT/expert/`` and ``OUT/lerobot_tiny/`` (records.jsonl, metrics.json, report.html with figures
-and, unless ``--no-video``, exterior + wrist mp4s of the expert) and ``OUT/index.html`` linking both.
+and, unless ``--no-video``, exterior + wrist mp4s: every expert episode, the tiny policy's failures)
+and ``OUT/index.html``, which compares the two side by side with their protocols.
 Re-running resumes (finished episodes are skipped); a few minutes on 2 CPU cores.
 """
 
@@ -29,7 +30,7 @@ def add_parser(sub) -> None:
     p.add_argument("--episodes", type=integer(1), default=1, help="episodes per (task, perturbation), >= 1 (default 1)")
     p.add_argument("--max-steps", type=integer(1), default=200, help="control steps per expert episode (default 200; REALM: 800)")
     p.add_argument("--workers", type=integer(1), default=None, help="worker processes (default: CPU cores)")
-    p.add_argument("--no-video", action="store_true", help="skip the expert's episode videos (faster)")
+    p.add_argument("--no-video", action="store_true", help="skip the episode videos (faster)")
     p.set_defaults(func=run)
 
 
@@ -38,7 +39,7 @@ def run(args) -> int:
     from realm_ms.eval.cli import evaluate
     from realm_ms.eval.policies.lerobot import make_tiny_policy
     from realm_ms.eval.protocol import PRESETS, available_perturbations, canonical_perturbation
-    from realm_ms.eval.report import write_report
+    from realm_ms.eval.report import write_index, write_report
     from realm_ms.tasks import TASKS
 
     os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
@@ -60,19 +61,20 @@ def run(args) -> int:
     print(f"realm demo: {len(args.tasks)} task(s) x {', '.join(perts)} x {args.episodes} episode(s)")
     reports = []
     # 160x90 camera frames keep CPU rendering (lavapipe) to a few minutes for the whole demo
-    evaluate("expert", args.tasks, perts, proto, args.out / "expert", workers=args.workers, camera_size=(160, 90),
-             videos="none" if args.no_video else "all")
+    rc = evaluate("expert", args.tasks, perts, proto, args.out / "expert", workers=args.workers, camera_size=(160, 90),
+                  videos="none" if args.no_video else "all")
     reports.append(("scripted expert", write_report(args.out / "expert", args.out / "expert" / "report.html", videos="all")))
     ckpt = args.out / "tiny_act"
     if not (ckpt / "config.json").exists():
         make_tiny_policy(ckpt)
     tiny = proto.with_overrides(max_steps=min(args.max_steps, 60))
-    evaluate(f"lerobot:{ckpt}", args.tasks, perts, tiny, args.out / "lerobot_tiny", workers=args.workers, camera_size=(160, 90))
+    # the learned policy's failures are recorded too, so its report shows what it did
+    rc = max(rc, evaluate(f"lerobot:{ckpt}", args.tasks, perts, tiny, args.out / "lerobot_tiny", workers=args.workers,
+                          camera_size=(160, 90), videos="none" if args.no_video else "failures"))
     reports.append(("tiny LeRobot ACT (random init)", write_report(args.out / "lerobot_tiny", args.out / "lerobot_tiny" / "report.html")))
-    links = "".join(f'<li><a href="{p.relative_to(args.out)}">{name}</a></li>' for name, p in reports)
-    (args.out / "index.html").write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>realm demo</title></head>"
-                                         f"<body><h1>realm demo</h1><ul>{links}</ul></body></html>")
+    write_index([args.out / "expert", args.out / "lerobot_tiny"], args.out / "index.html", names=[n for n, _ in reports],
+                reports=[p for _, p in reports], title="realm demo: scripted expert vs a tiny LeRobot ACT policy")
     for name, p in reports:
         print(f"{name}: {p}")
     print(f"open {args.out / 'index.html'}")
-    return 0
+    return rc  # non-zero when an episode ended in an error record (``evaluate`` says how many and where)

@@ -80,6 +80,30 @@ def check_int(value: Any, where: str, minimum: int = 1, maximum: int | None = No
     return n
 
 
+SEED_LIMIT = 2**32  # numpy / torch / SAPIEN seeds: integers in [0, 2**32)
+
+
+def check_seed(value: Any, where: str, count: int = 1) -> int:
+    """A seed in [0, 2**32); with ``count`` > 1, the seeds ``value .. value + count - 1`` must all be."""
+    if isinstance(value, str):
+        value = value.strip()
+    try:
+        n = check_int(value, where, 0, SEED_LIMIT - 1)
+    except InputError as e:
+        raise InputError(f"{e} (a seed is an integer in [0, 2**32))") from None
+    if count > 1 and n + count - 1 >= SEED_LIMIT:
+        raise InputError(f"{where}: seeds {n}..{n + count - 1} go past 2**32 - 1; use a smaller seed")
+    return n
+
+
+def check_port(value: Any, where: str) -> int:
+    """A TCP port, 1..65535."""
+    try:
+        return check_int(value, where, 1, 65535)
+    except InputError as e:
+        raise InputError(f"{e} (a TCP port is 1..65535)") from None
+
+
 def check_input_file(path: str | os.PathLike, where: str, suffixes: tuple[str, ...] = ()) -> Path:
     """An existing regular file (with one of ``suffixes`` if given)."""
     p = Path(path)
@@ -92,41 +116,69 @@ def check_input_file(path: str | os.PathLike, where: str, suffixes: tuple[str, .
     return p
 
 
-def check_output_file(path: str | os.PathLike, where: str) -> Path:
-    """A file path that can be written: not an existing directory, and its parent is (or can be
-    made) a writable directory. Checked before long work, so a run never fails at its end."""
+def check_output_path(path: str | os.PathLike, where: str, kind: str = "file", example: str | None = None) -> Path:
+    """An output path that can be written, checked before any work: ``kind="file"`` (not an
+    existing directory) or ``kind="dir"`` (not an existing file); a path below a file, or in a
+    directory that cannot be written into, is rejected too. One line naming ``where``; ``example``
+    is a file name suggested when a directory is given for a file."""
+    if kind not in ("file", "dir"):
+        raise ValueError(f"check_output_path: kind must be 'file' or 'dir', got {kind!r}")
     p = Path(path)
-    if str(path) == "" or p.name in ("", ".", ".."):
-        raise InputError(f"{where}: {str(path)!r} is not a file name")
-    if p.is_dir():
-        raise InputError(f"{where}: {p} is a directory; give a file path (e.g. {p / 'MODEL.yaml'})")
-    _check_parent(p, where)
-    return p
-
-
-def check_output_dir(path: str | os.PathLike, where: str) -> Path:
-    """A directory that can be created or written into (not an existing file)."""
-    p = Path(path)
-    if str(path) == "":
-        raise InputError(f"{where}: empty path")
+    if str(path) == "" or (kind == "file" and p.name in ("", ".", "..")):
+        raise InputError(f"{where}: {str(path)!r} is not a {'file' if kind == 'file' else 'directory'} name")
+    if kind == "file":
+        if p.is_dir():
+            hint = f" (e.g. {p / example})" if example else ""
+            raise InputError(f"{where}: {p} is a directory; give a file path{hint}")
+        if p.exists() and not p.is_file():
+            raise InputError(f"{where}: {p} exists and is not a regular file")
+        if p.exists() and not os.access(p, os.W_OK):
+            raise InputError(f"{where}: {p} exists and is not writable")
+        _check_parent(p, where)
+        return p
     if p.exists() and not p.is_dir():
         raise InputError(f"{where}: {p} exists and is a file; give a directory")
     if p.is_dir():
-        if not os.access(p, os.W_OK | os.X_OK):
-            raise InputError(f"{where}: directory {p} is not writable")
+        _check_writable_dir(p, p, where)
         return p
     _check_parent(p, where)
     return p
 
 
+def check_output_file(path: str | os.PathLike, where: str) -> Path:
+    """A file path that can be written: not an existing directory, and its parent is (or can be
+    made) a writable directory. Checked before long work, so a run never fails at its end."""
+    return check_output_path(path, where, "file")
+
+
+def check_output_dir(path: str | os.PathLike, where: str) -> Path:
+    """A directory that can be created or written into (not an existing file)."""
+    return check_output_path(path, where, "dir")
+
+
 def _check_parent(p: Path, where: str) -> None:
     parent = p.absolute().parent
-    while not parent.exists():  # the nearest existing ancestor decides whether we can create it
+    while not parent.exists() and not parent.is_symlink():  # the nearest existing ancestor decides
         parent = parent.parent
     if not parent.is_dir():
-        raise InputError(f"{where}: cannot create {p}: {parent} is a file")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{where}: cannot write {p}: directory {parent} is not writable")
+        raise InputError(f"{where}: cannot create {p}: {parent} is {'a file' if parent.is_file() else 'not a directory'}")
+    _check_writable_dir(parent, p, where)
+
+
+def _check_writable_dir(d: Path, p: Path, where: str) -> None:
+    """``d`` accepts new files: the permission bits, then a real probe (root passes ``os.access``
+    even on read-only or virtual file systems such as /sys)."""
+    what = f"directory {d} is not writable" if d == p else f"cannot write {p}: directory {d} is not writable"
+    if not os.access(d, os.W_OK | os.X_OK):
+        raise InputError(f"{where}: {what}")
+    import tempfile
+
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".realm-write-probe-", dir=d)
+    except OSError as e:
+        raise InputError(f"{where}: {what} ({e.strerror})") from None
+    os.close(fd)
+    os.unlink(probe)
 
 
 def check_choice(value: Any, where: str, choices: tuple[str, ...] | list[str]) -> str:
@@ -160,6 +212,11 @@ def non_negative(unit: str = "") -> Callable[[str], float]:
 def integer(minimum: int = 1, maximum: int | None = None) -> Callable[[str], int]:
     """argparse type: an integer >= ``minimum``."""
     return _argtype(lambda s: check_int(s, "value", minimum, maximum), "integer")
+
+
+def seed() -> Callable[[str], int]:
+    """argparse type: a seed, an integer in [0, 2**32)."""
+    return _argtype(lambda s: check_seed(s, "value"), "seed")
 
 
 def finite(unit: str = "") -> Callable[[str], float]:

@@ -7,7 +7,7 @@ import torch
 
 import realm_ms  # noqa: F401
 from realm_ms.agents.actuation import ActuationStage
-from realm_ms.agents.droid_controller import FRANKA_EFFORT_LIMITS
+from realm_ms.agents.control import FRANKA_EFFORT_LIMITS
 
 STEP = torch.tensor([0.3, -0.3, 0.3, 0.3, 0.3, -0.3, 0.3])
 
@@ -116,7 +116,7 @@ def test_actuation_stage_offset_matches_impedance_law(env):
 
 def test_explicit_damping_alone_is_unstable_at_120hz():
     """Why the diagonal damping rides on PhysX's implicit drive: the purely explicit law blows up."""
-    e = make(droid_control=dict(implicit_damping=False))
+    e = make(droid_control=dict(integrator="explicit"))
     e.reset(seed=0)
     q0 = e.unwrapped.agent.arm_qpos[0].clone()
     traj, _ = run(e, q0 + STEP, 45)
@@ -144,7 +144,7 @@ def test_control_rate_model_refresh_stays_close_to_exact_law():
 
 
 def test_gain_presets_change_the_loop():
-    from realm_ms.agents.droid_controller import GAIN_PRESETS
+    from realm_ms.agents.control import GAIN_PRESETS
 
     e = make(droid_control=dict(gains="realm"))
     g = e.unwrapped.agent.arm_controller.driver.gains

@@ -3,12 +3,14 @@ step-exact integrator predicts with, and the integrator switch."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import torch
 
 from realm_ms.agents.arm_model import ArmModel
-from realm_ms.agents.droid_controller import DroidArmDriver, DroidControlConfig
+from realm_ms.agents.control import DroidArmDriver, DroidControlConfig
 from realm_ms.sysid.locked_urdf import BASE_LINK, TIP_LINK, source_urdf_path
 
 HOME = [0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0]
@@ -73,19 +75,38 @@ def test_build_time_effects_tell_the_driver_the_plant_inertia_they_add(model64, 
     assert np.abs(predicted - added).max() < 1e-5 + 1e-4 * np.abs(added).max(), (predicted, added)
 
 
-def test_integrator_switch_and_legacy_flag():
+def test_integrator_switch():
     assert DroidControlConfig().integrator == "exact"
-    assert DroidControlConfig(implicit_damping=True).integrator == "implicit_damping"
-    assert DroidControlConfig(implicit_damping=False).integrator == "explicit"
     with pytest.raises(ValueError, match="integrator"):
         DroidControlConfig(integrator="rk4")
+
+
+def test_implicit_damping_drive_carries_the_laws_damping_diagonal(model64):
+    """With ``integrator="implicit_damping"`` the drive carries Kd's diagonal at the reference pose
+    (or the configured values) and the explicit torque pre-compensates it: torque + drive = the law."""
+    model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
+    cfg = DroidControlConfig(joint_physics="none", integrator="implicit_damping")
+    drv = DroidArmDriver(model, cfg, 1)
+    q = torch.tensor([list(cfg.reference_qpos)], dtype=torch.float32)
+    jac = model.jacobian(q)
+    kd = torch.diag_embed(drv.gains.kqd) + jac.transpose(1, 2) @ (drv.gains.kxd[..., None] * jac)
+    assert torch.allclose(drv.drive_damping, torch.diagonal(kd[0]), rtol=1e-5)
+    assert (drv.drive_damping > 0).all()
+    explicit = DroidArmDriver(model, DroidControlConfig(joint_physics="none", integrator="explicit"), 1)
+    qd = torch.full_like(q, 0.1)
+    for d in (drv, explicit):
+        d.reset(q)
+        d.set_target(q + 0.01)
+    assert torch.allclose(drv.torque(q, qd, 1 / 120) - drv.drive_damping * qd, explicit.torque(q, qd, 1 / 120), atol=1e-4)
+    fixed = DroidArmDriver(model, DroidControlConfig(integrator="implicit_damping", drive_damping=(1.0,) * 7), 1)
+    assert torch.all(fixed.drive_damping == 1.0)
 
 
 def test_exact_step_holds_a_pose_and_reaches_a_target(model64):
     """No implicit drive damping is needed: the exact step is stable on the light wrist at 120 Hz."""
     model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
     drv = DroidArmDriver(model, DroidControlConfig(joint_physics="none"), 1)
-    assert torch.all(drv.implicit_damping == 0)
+    assert torch.all(drv.drive_damping == 0)
     q = torch.tensor([HOME], dtype=torch.float32)
     drv.reset(q)
     drv.set_target(q)
@@ -105,7 +126,7 @@ def test_numpy_fast_path_equals_batched_torch_law(model_rate):
     for numpy_path in (True, False):
         drv = DroidArmDriver(model, DroidControlConfig(joint_physics="realm", model_rate=model_rate), 1)
         drv.allow_numpy = numpy_path
-        assert drv._numpy_path() is numpy_path
+        assert drv.numpy_path() is numpy_path
         drv.reset(q0)
         res = []
         for k in range(48):
@@ -142,19 +163,9 @@ def test_path_rate_matches_the_mujoco_reference_on_both_paths():
 
         def driver(n, act, model_rate=model_rate, numpy_path=numpy_path):
             d = make(n, act)
-            d.config.model_rate, d.allow_numpy = model_rate, numpy_path
-            assert d._numpy_path() is numpy_path
-            plan = d._plan_path_numpy if numpy_path else d._plan_path
-            d.plans = 0
-
-            def counted(*a, _plan=plan, _d=d):
-                _d.plans += 1
-                return _plan(*a)
-
-            if numpy_path:
-                d._plan_path_numpy = counted
-            else:
-                d._plan_path = counted
+            d = DroidArmDriver(d.model, dataclasses.replace(d.config, model_rate=model_rate), n, "cpu", act)
+            d.allow_numpy = numpy_path
+            assert d.numpy_path() is numpy_path
             drivers.append(d)
             return d
 
@@ -162,7 +173,8 @@ def test_path_rate_matches_the_mujoco_reference_on_both_paths():
         q = replay(sim, hz)
         err = q[np.round(t * hz).astype(int)] - ref[np.round(t * 1000).astype(int)]
         rms[model_rate, numpy_path] = np.sqrt((err**2).mean(0))
-        plans[model_rate, numpy_path] = drivers[-1].plans
+        last = drivers[-1]
+        plans[model_rate, numpy_path] = (last.folded if numpy_path else last).rate.plans if model_rate == "path" else 0
     for key, r in rms.items():
         assert r.max() <= 1e-3, (key, r)
     assert np.abs(rms["path", True] - rms["physics", True]).max() < 1e-4, rms
@@ -187,14 +199,7 @@ def test_path_plans_agree_across_backends_with_partial_replans():
         drv.allow_numpy = numpy_path
         drv.reset(torch.as_tensor(q0, dtype=torch.float32))
         arm = np.diag(drv.armature.double().numpy())
-        q, qd, res, plans = q0.copy(), np.zeros_like(q0), [], [0]
-        plan = drv._plan_path_numpy if numpy_path else drv._plan_path
-
-        def counted(*a, _plan=plan):
-            plans[0] += 1
-            return _plan(*a)
-
-        setattr(drv, "_plan_path_numpy" if numpy_path else "_plan_path", counted)
+        q, qd, res = q0.copy(), np.zeros_like(q0), []
         target = q0.copy()
         for k in range(48):
             if k % 8 == 0:
@@ -208,7 +213,8 @@ def test_path_plans_agree_across_backends_with_partial_replans():
             q = q + dt * qd
             res.append(tau)
         outs.append(np.stack(res))
-        assert plans[0] > 48 // 8, plans  # partial re-plans happened
+        plans = (drv.folded if numpy_path else drv).rate.plans
+        assert plans > 48 // 8, plans  # partial re-plans happened
     assert np.abs(outs[0] - outs[1]).max() < 5e-3, np.abs(outs[0] - outs[1]).max()
 
 
@@ -217,7 +223,7 @@ def test_an_arm_that_does_not_move_as_predicted_gets_at_most_the_motor_limit(num
     """The exact step's torque may exceed the motor limit only while PhysX follows its prediction
     (free motion); an arm held in place (contact) after a large target step gets the clipped torque,
     as a real motor would give it, on both the numpy and the torch path."""
-    from realm_ms.agents.droid_controller import FRANKA_EFFORT_LIMITS
+    from realm_ms.agents.control import FRANKA_EFFORT_LIMITS
 
     model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
     q0 = torch.tensor([HOME], dtype=torch.float32)

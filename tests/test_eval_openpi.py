@@ -107,3 +107,124 @@ def test_server_error_text_frame_is_reported():
         out = pol.act(_batch(1))
         assert out.errors and "ValueError: bad observation" in out.errors[0]
         pol.close()
+
+
+# ---- concurrent serving, several servers, action spaces --------------------------------------------
+class _Probe:
+    """Echoes the row's joints (so order is checkable), sleeps, and records the peak concurrency."""
+
+    def __init__(self, sleep=0.05):
+        import threading
+
+        self.sleep, self.lock, self.now, self.peak = sleep, threading.Lock(), 0, 0
+
+    def __call__(self, obs):
+        with self.lock:
+            self.now += 1
+            self.peak = max(self.peak, self.now)
+        time.sleep(self.sleep)
+        with self.lock:
+            self.now -= 1
+        q = np.asarray(obs["observation/joint_position"], dtype=np.float64).reshape(7)
+        return {"actions": np.concatenate([np.tile(q, (4, 1)), np.zeros((4, 1))], axis=1)}
+
+
+def _distinct_batch(n):
+    b = _batch(n)
+    b.state[:, 0] = np.arange(n) * 0.1  # each row's joint 0 names its slot
+    return b
+
+
+def test_rows_spread_over_servers_concurrently_and_come_back_in_order():
+    probe = _Probe()
+    servers = [OpenPIServer(probe).start() for _ in range(3)]
+    try:
+        pol = make_policy("openpi:" + ",".join(s.address for s in servers))
+        out = pol.act(_distinct_batch(9))
+        assert out.errors is None and out.actions.shape == (9, 4, 8)
+        assert np.allclose(out.actions[:, 0, 0], np.arange(9) * 0.1, atol=1e-6)  # slot order kept
+        assert all(s.requests >= 1 for s in servers) and sum(s.requests for s in servers) == 9
+        assert probe.peak >= 2  # requests really overlapped
+        assert pol.spec() == "openpi:" + ",".join(s.address for s in servers)
+        pol.close()
+    finally:
+        for s in servers:
+            s.stop()
+
+
+def test_in_flight_requests_are_bounded():
+    probe = _Probe()
+    servers = [OpenPIServer(probe).start() for _ in range(4)]
+    try:
+        pol = make_policy("openpi:" + ",".join(s.address for s in servers), openpi_max_in_flight=2)
+        assert pol.act(_distinct_batch(8)).errors is None
+        assert probe.peak <= 2
+        seq = make_policy(f"openpi:{servers[0].address}")  # one server, one connection: one at a time
+        probe.peak = 0
+        assert seq.act(_distinct_batch(4)).errors is None and probe.peak == 1
+        pol.close()
+        seq.close()
+    finally:
+        for s in servers:
+            s.stop()
+
+
+def test_a_dead_server_fails_only_its_rows():
+    with OpenPIServer(hold_infer) as live:
+        dead = f"127.0.0.1:{_free_port()}"
+        pol = make_policy(f"openpi:{live.address},{dead}", openpi_wait_s=1.0)
+        out = pol.act(_batch(6))
+        assert out.errors is not None
+        failed = [e for e in out.errors if e]
+        assert failed and all(dead in e and "unreachable" in e for e in failed)
+        assert len(failed) < 6 and live.requests == 6 - len(failed)
+        pol.close()
+
+
+def test_server_metadata_declares_the_action_space():
+    def cartesian(obs):
+        return {"actions": np.full((5, 7), 0.5)}
+
+    with OpenPIServer(cartesian, metadata={"action_space": "cartesian_velocity", "gripper_action_space": "position"}) as srv:
+        pol = make_policy(f"openpi:{srv.address}")
+        assert pol.env_action_space() == {"action_space": "cartesian_velocity", "gripper_action_space": "position"}
+        out = pol.act(_batch(2))
+        assert out.errors is None and out.actions.shape == (2, 5, 7)
+        pol.close()
+        joint = make_policy(f"openpi:{srv.address}", action_space="joint_velocity")  # the flag wins; 7-D replies are refused
+        out = joint.act(_batch(1))
+        assert out.errors and "expected (T, 8)" in out.errors[0]
+        joint.close()
+
+
+def test_velocity_chunks_from_a_server_drive_an_episode_to_success(tmp_path):
+    """A stand-in server answers the scripted expert's recorded joint velocities, 8 per request;
+    ``realm eval`` in joint_velocity space (declared by the server) replays them to success."""
+    import gymnasium as gym
+
+    import realm_ms  # noqa: F401
+    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval.policies.openpi_server import ReplayInfer
+    from realm_ms.eval.protocol import PRESETS
+    from realm_ms.eval.records import read_records
+    from realm_ms.expert.core import start_episode
+
+    env = gym.make("REALM-PickApple-v1", obs_mode="state", action_space="joint_velocity")
+    obs, expert = start_episode(env, seed=0)
+    actions = []
+    for _ in range(200):
+        a = expert.act(obs)
+        actions.append(a[0].numpy())
+        obs, _, term, trunc, info = env.step(a)
+        if bool(term[0]) or bool(trunc[0]):
+            break
+    env.close()
+    assert bool(info["success"][0])
+    meta = {"action_space": "joint_velocity", "gripper_action_space": "velocity"}
+    with OpenPIServer(ReplayInfer(np.stack(actions), chunk=8), metadata=meta) as srv:
+        proto = PRESETS["realm"].with_overrides(episodes=1, seed=0, max_steps=len(actions) + 8, replan_every=8)
+        evaluate(f"openpi:{srv.address}", ["REALM-PickApple-v1"], ["Default"], proto, tmp_path / "run", workers=1,
+                 backend="cpu", camera_size=(64, 36), quality=False, progress=False, quiet=True)
+    (rec,) = read_records(tmp_path / "run" / "records.jsonl")
+    assert rec["status"] == "ok" and rec["success"], rec
+    assert rec["action_space"] == "joint_velocity:velocity"

@@ -3,7 +3,8 @@
 Layers, lowest first (a package may import only packages of lower layers, its own modules, and
 the leaf utilities)::
 
-    registry, errors, validate, contacts, rendering   leaf utilities
+    registry, registration, errors, validate,        leaf utilities (registration: REALM ids,
+    contacts, rendering, known_warnings               imports the pack by name on first make)
     agents, assets, asset_pipeline                    the robot; objects and their pipeline
     tasks, sysid                                      envs (on agents + assets); sysid (on agents)
     perturbations                                     reconfiguration hooks on tasks
@@ -12,7 +13,8 @@ the leaf utilities)::
     lerobot, lerobot_env_realm                        LeRobot export and env plugin
     cli, demo, render_cli, realm_ms/__init__          entry points (may import anything)
 
-Imports inside functions count too: a lazy import still ties the two modules together.
+Imports inside functions and under ``if TYPE_CHECKING:`` count too: a lazy import still ties the
+two modules together, and an annotation-only one still says each needs the other to be read.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("realm_ms", "asset_pipeline", "lerobot_env_realm")
-LEAVES = {"realm_ms.registry", "realm_ms.errors", "realm_ms.validate", "realm_ms.contacts", "realm_ms.rendering"}
+LEAVES = {"realm_ms.registry", "realm_ms.registration", "realm_ms.known_warnings", "realm_ms.errors", "realm_ms.validate", "realm_ms.contacts", "realm_ms.rendering"}
 LAYERS = [
     {"realm_ms.agents", "realm_ms.assets", "asset_pipeline"},
     {"realm_ms.tasks", "realm_ms.sysid"},
@@ -53,16 +55,9 @@ def package_of(mod: str) -> str:
 
 
 def imports(path: Path) -> set[str]:
-    """Every project module ``path`` imports, at module level or inside functions."""
+    """Every project module ``path`` imports: at module level, inside functions, under ``TYPE_CHECKING``."""
     out = set()
-    tree = ast.parse(path.read_text())
-    type_only = {  # `if TYPE_CHECKING:` imports are annotations, not dependencies
-        id(n) for block in ast.walk(tree) if isinstance(block, ast.If) and "TYPE_CHECKING" in ast.unparse(block.test)
-        for stmt in block.body for n in ast.walk(stmt)
-    }
-    for node in ast.walk(tree):
-        if id(node) in type_only:
-            continue
+    for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             out |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:

@@ -135,7 +135,7 @@ def test_payload_sags_and_gravity_comp_keeps_nominal_model(sim, commands, nomina
 def test_benchmark_stage_interface():
     """Effects are ActuationStages the lead's DroidArmDriver runs unchanged."""
     from realm_ms.agents.actuation import ActuationModel
-    from realm_ms.agents.droid_controller import DroidArmDriver, DroidControlConfig
+    from realm_ms.agents.control import DroidArmDriver, DroidControlConfig
     from realm_ms.sysid.simulator import ReplaySimulator
 
     model = ReplaySimulator.__new__(ReplaySimulator)  # only for the ArmModel path
@@ -163,7 +163,7 @@ def test_gravity_comp_error_holds_the_static_offset_the_law_predicts(sim):
     did not, the offset came out about twice this."""
     import torch
 
-    from realm_ms.agents.droid_controller import GAIN_PRESETS, DroidControlConfig, TorchGains, resolve
+    from realm_ms.agents.control import GAIN_PRESETS, BatchedGains, DroidControlConfig, resolve
 
     q0 = np.array([[0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8]])
     steps, scale = 600, 0.2
@@ -171,7 +171,7 @@ def test_gravity_comp_error_holds_the_static_offset_the_law_predicts(sim):
     q = sim.rollout(q0, np.zeros_like(q0), hold, [make_effect("gravity_comp_error", {"scale": scale})])[0, -1]
     model = sim.model
     qt = torch.as_tensor(q, dtype=model.dtype)[None]
-    gains = TorchGains.from_gains(resolve(DroidControlConfig().gains, GAIN_PRESETS, "gain"), 1, "cpu", torch.float64)
+    gains = BatchedGains.from_gains(resolve(DroidControlConfig().gains, GAIN_PRESETS, "gain"), 1, "cpu", torch.float64)
     jac = model.jacobian(qt).to(torch.float64)
     kp = torch.diag_embed(gains.kq) + jac.transpose(-1, -2) @ (gains.kx[..., None] * jac)
     g = model.gravity_torque(qt).to(torch.float64)

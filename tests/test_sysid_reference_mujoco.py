@@ -3,13 +3,15 @@ PhysX plant measured against it."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import torch
 
 mujoco = pytest.importorskip("mujoco")
 
-from realm_ms.agents.droid_controller import ImpedanceGains  # noqa: E402
+from realm_ms.agents.control import ImpedanceGains  # noqa: E402
 from realm_ms.sysid.reference_mujoco import MujocoConfig, MujocoReference  # noqa: E402
 
 HOME = np.array([0.0, -np.pi / 5, 0.0, -4 * np.pi / 5, 0.0, 3 * np.pi / 5, 0.0])
@@ -89,6 +91,7 @@ def reference_log():
 
 
 def _physx_rms(reference_log, integrator: str, hz: float = 120.0) -> np.ndarray:
+    from realm_ms.agents.control import DroidArmDriver
     from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
 
     cmd15, ref, duration = reference_log
@@ -97,8 +100,7 @@ def _physx_rms(reference_log, integrator: str, hz: float = 120.0) -> np.ndarray:
 
     def driver(n, act):
         d = make(n, act)
-        d.config.integrator = integrator
-        return d
+        return DroidArmDriver(d.model, dataclasses.replace(d.config, integrator=integrator), n, "cpu", act)
 
     sim._driver = driver
     return _rms_on_40hz_grid(_replay(sim, cmd15, hz, duration), hz, ref, duration)

@@ -21,7 +21,7 @@ def test_joint_contract_matches_the_benchmark(ev):
     drv = sim._driver(1, __import__("realm_ms.agents.actuation", fromlist=["ActuationModel"]).ActuationModel())
     for i, j in enumerate(sim.arms[0].get_active_joints()):
         assert j.stiffness == 0.0
-        assert j.damping == pytest.approx(float(drv.implicit_damping[i]), rel=1e-5)
+        assert j.damping == pytest.approx(float(drv.drive_damping[i]), rel=1e-5)
         assert j.friction == 0.0
     assert sim.dt == pytest.approx(1 / 120)
     assert len(sim.arms[0].get_links()) == 8  # gripper locked and lumped into link 7

@@ -29,6 +29,13 @@ def test_judge_uses_the_null_rmse_as_floor_and_accepts_confound_partners():
 def test_null_case_fails_when_it_names_an_effect_or_is_unexplained():
     assert not judge([_row("none", found=True)])[0].passed
     assert not judge([_row("none", found=False, unexplained=True)])[0].passed
+    partial = _row("none", found=False)
+    partial.verdict_code = "partially_explained"
+    assert not judge([partial])[0].passed
+    # a hidden effect named as "partially explained" by the screening counts as ranked (the fit decides)
+    named = _row("latency", found=False, after=2.9e-4)
+    named.verdict_code = "partially_explained"
+    assert judge([named])[0].ranked_first
     # without a null row for the seed the noise floor is the floor
     assert judge([_row("latency", seed=5, floor=2e-4, after=2.9e-4)])[0].passed
 

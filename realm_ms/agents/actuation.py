@@ -1,6 +1,6 @@
 """Actuation stages: everything between the policy's joint command and the torque on the joints.
 
-The DROID controller (``droid_controller.py``) runs the Polymetis law on what the robot *measures*
+The DROID controller (``realm_ms.agents.control``) runs the Polymetis law on what the robot *measures*
 and hands the resulting torque through a chain of stages. The nominal robot has no stages; the
 sysid workbench's physical effects (friction, latency, encoder bias, payload, ...) are stages, so a
 fitted robot model plugs into the benchmark envs and the sysid replay simulator the same way.
@@ -30,7 +30,7 @@ import torch
 
 if TYPE_CHECKING:
     from realm_ms.agents.arm_model import ArmModel
-    from realm_ms.agents.droid_controller import TorchGains
+    from realm_ms.agents.control.presets import BatchedGains
 
 
 @dataclass
@@ -63,7 +63,7 @@ class ActuationStage:
     def command(self, q_target: torch.Tensor, state: ControlState) -> torch.Tensor:
         return q_target
 
-    def gains(self, gains: "TorchGains") -> "TorchGains":
+    def gains(self, gains: "BatchedGains") -> "BatchedGains":
         return gains
 
     def actuator(self, tau: torch.Tensor, state: ControlState) -> torch.Tensor:

@@ -3,7 +3,7 @@
 Control modes (first = default):
 - ``droid_joint_pos``: 8-D action = 7 absolute joint targets (rad) + gripper in [0, 1] (1 = closed),
   at 15 Hz; the arm is torque-controlled by the Polymetis hybrid joint impedance law every physics
-  step (``droid_controller.py``), gravity compensated by the robot's own model as on the real arm.
+  step (``realm_ms.agents.control``), gravity compensated by the robot's own model as on the real arm.
 - ``pd_joint_pos``, ``pd_joint_delta_pos``, ``pd_ee_delta_pose``: ManiSkill's usual ideal PD modes for
   RL users (PhysX drives, gravity disabled on the links as ManiSkill does for its Panda).
 
@@ -26,10 +26,8 @@ import sapien
 from realm_ms.agents import robotiq_2f85 as gripper
 from realm_ms.agents.actuation import ActuationModel
 from realm_ms.agents.arm_model import ArmModel
-from realm_ms.agents.droid_controller import (
-    DroidControlConfig,
-    DroidJointImpedanceControllerConfig,
-)
+from realm_ms.agents.control.config import DroidControlConfig
+from realm_ms.agents.control.maniskill import DroidJointImpedanceControllerConfig
 from realm_ms.contacts import any_contact
 from realm_ms.rendering import CameraSettings, vertical_fov
 from realm_ms.agents.urdf import ARM_JOINTS, CAMERA_LINK, DROID_RESET_QPOS, FLANGE_LINK, TCP_LINK, panda_droid_urdf_path

@@ -48,6 +48,33 @@ def check_physics_hz(value: Any, where: str = "physics_hz") -> float:
     return hz
 
 
+# settings that divide (tanh widths): 0 is a division by zero, a negative width flips the switch
+POSITIVE_SETTINGS = {"direction_velocity": "rad/s", "torque_width": "N·m"}
+
+
+def check_settings(effect: Effect, where: str) -> None:
+    """An effect's settings (``config``) have the type of their defaults: true/false, finite
+    numbers, tuples of as many finite numbers; widths (``POSITIVE_SETTINGS``) are > 0."""
+    import dataclasses
+
+    for f in dataclasses.fields(effect.config):
+        v = getattr(effect.config, f.name)
+        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
+        unit = POSITIVE_SETTINGS.get(f.name)
+        if isinstance(default, bool):
+            if not isinstance(v, bool):
+                raise ValueError(f"{where}.{f.name}: expected true or false, got {v!r}")
+            continue
+        values = v if isinstance(default, tuple) else (v,)
+        if isinstance(default, tuple) and (not isinstance(v, tuple) or len(v) != len(default)):
+            raise ValueError(f"{where}.{f.name}: expected a list of {len(default)} numbers, got {v!r}")
+        for x in values:
+            if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+                raise ValueError(f"{where}.{f.name}: expected {'finite numbers' if values is v else 'a finite number'}, got {v!r}")
+            if unit and x <= 0:
+                raise ValueError(f"{where}.{f.name}: must be > 0 {unit} (a tanh width), got {v!r}")
+
+
 @dataclass
 class RobotModel:
     effects: list[Effect] = field(default_factory=list)
@@ -120,7 +147,8 @@ class RobotModel:
             except (KeyError, ValueError, TypeError) as e:
                 msg = e.args[0] if isinstance(e, KeyError) and e.args else e
                 raise ValueError(f"{where}: effects[{i}]: {msg}") from None
-        from realm_ms.agents.droid_controller import GAIN_PRESETS, JOINT_PHYSICS_PRESETS
+            check_settings(effects[-1], f"{where}: effects[{i}].config")
+        from realm_ms.agents.control.presets import GAIN_PRESETS, JOINT_PHYSICS_PRESETS
 
         presets = {}
         for key, table, default in (("gains", GAIN_PRESETS, "polymetis"), ("joint_physics", JOINT_PHYSICS_PRESETS, "none")):

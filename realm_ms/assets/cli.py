@@ -79,6 +79,12 @@ def _build(args: argparse.Namespace) -> int:
                             limit_per_source=args.limit, strict=not args.all, progress=not args.quiet)
     except SourceUnavailable as e:
         raise UserError(str(e)) from None
+    if rep.total == 0:  # an empty folder, or every source skipped: not a success with "0 built"
+        from asset_pipeline.sources.folder import MESH_EXTS
+
+        skipped = "; ".join(f"{k}: {v}" for k, v in rep.skipped_sources.items())
+        raise UserError(f"no objects found in {', '.join(map(str, sources))}; nothing was built"
+                        + (f" (skipped {skipped})" if skipped else f" (a folder source needs mesh files: {' '.join(MESH_EXTS)})"))
     d = {**rep.__dict__, "objects_per_minute": round(rep.objects_per_minute, 1)}
     if args.json:
         print(json.dumps(d))

@@ -197,11 +197,13 @@ class BatchedBackend(Backend):
             idx = torch.as_tensor(rows, dtype=torch.long, device=g.env.unwrapped.device)
             obs, info = g.env.reset(seed=list(g.seeds), options={"env_idx": idx})
         g.reset_once, g.obs = True, obs
+        from realm_ms.agents.droid_action_spaces import hold_action
+
         u = g.env.unwrapped
-        if g.hold is None or whole:
-            g.hold = u.agent.droid_state().clone()
+        if g.hold is None or whole:  # keep still, in the env's action space (velocity spaces: zeros)
+            g.hold = hold_action(u)
         else:
-            g.hold[idx] = u.agent.droid_state()[idx]
+            g.hold[idx] = hold_action(u)[idx]
         self._reset_env_policy(g, rows, whole)
         instructions = u.get_language_instruction()
         pert = info.get("perturbation")

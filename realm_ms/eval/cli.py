@@ -18,16 +18,18 @@ from realm_ms.eval.protocol import PRESETS
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("eval", help="evaluate a policy under the REALM protocol; `realm eval report RUN/` for the report")
-    p.add_argument("--policy", help="expert | zero | random | lerobot:PATH_OR_ID | openpi:HOST:PORT")
+    p = sub.add_parser("eval", help="evaluate a policy under the REALM protocol; `realm eval report RUN/` for the report",
+                       usage="realm eval --policy SPEC --out RUN/ [options]\n       realm eval report RUN/ [--out FILE] [--videos ...] [--reference POLICY]")
+    p.add_argument("--policy", help="required: expert | zero | random | lerobot:PATH_OR_ID | openpi:HOST:PORT")
     p.add_argument("--protocol", choices=sorted(PRESETS), default="realm", help="preset the other flags override (default realm)")
     p.add_argument("--tasks", nargs="+", help="env ids, or 'all' (default: the protocol's)")
     p.add_argument("--perturbations", nargs="+", help="names (e.g. Default V-AUG), or 'all' (default: the protocol's)")
     p.add_argument("--episodes", type=int, help="episodes per (task, perturbation) cell (REALM: 25)")
-    p.add_argument("--seed", type=int, help="base seed; episode i uses seed + i (REALM: 1234)")
+    from realm_ms.validate import integer, positive, seed
+
+    p.add_argument("--seed", type=seed(), help="base seed, an integer in [0, 2**32); episode i uses seed + i (REALM: 1234)")
     p.add_argument("--max-steps", type=int, help="control steps per episode (REALM: 800)")
     p.add_argument("--replan-every", type=int, help="actions executed open-loop per policy call (REALM: 8)")
-    from realm_ms.validate import integer
 
     p.add_argument("--workers", type=integer(1), default=None, help="parallel env processes, >= 1 (default: CPU cores, at most 16)")
     p.add_argument("--backend", choices=("auto", "cpu", "gpu", "batched"), default="auto",
@@ -37,12 +39,16 @@ def add_parser(sub) -> None:
     p.add_argument("--camera-size", default=None, help="WxH of the observed camera frames (default 320x180)")
     p.add_argument("--videos", choices=("none", "failures", "all"), default="none", help="exterior + wrist mp4 per episode")
     p.add_argument("--openpi-format", choices=("pi0", "groot"), default="pi0", help="openpi request keys/resolution")
-    p.add_argument("--openpi-wait", type=float, default=30.0, help="seconds to retry a down openpi server before failing the episode")
+    p.add_argument("--openpi-wait", type=positive("s"), default=30.0,
+                   help="seconds (finite, > 0) to retry a down openpi server before failing the episode")
+    p.add_argument("--action-space", default=None, help="DROID action space the policy acts in: joint_position (default) | joint_velocity | "
+                   "cartesian_velocity | cartesian_position, optionally :position or :velocity for the gripper (e.g. joint_velocity:position, "
+                   "pi0-FAST-DROID); default: what an openpi server's metadata declares")
     p.add_argument("--device", default="cpu", help="torch device for LeRobot policies")
     p.add_argument("--no-quality", action="store_true", help="skip trajectory-quality metrics (contacts walk per step)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
-    p.add_argument("--out", type=Path, help="run directory (records.jsonl, metrics.json)")
-    rsub = p.add_subparsers(dest="eval_command", metavar="report")
+    p.add_argument("--out", type=Path, help="required: run directory (run.json, records.jsonl, metrics.json); the same --out resumes")
+    rsub = p.add_subparsers(dest="eval_command", title="report a finished run", metavar="report RUN/")
     r = rsub.add_parser("report", help="HTML report (+ PNGs, markdown/CSV table) of a run directory")
     r.add_argument("run_dir", type=Path, help="run directory written by `realm eval`")
     r.add_argument("--out", dest="report_out", type=Path, default=None, help="HTML file (default RUN/report.html)")
@@ -77,6 +83,9 @@ def resolve(args):
     for name in ("episodes", "max_steps", "replan_every"):
         if getattr(proto, name) < 1:
             raise UserError(f"--{name.replace('_', '-')} must be >= 1")
+    from realm_ms.validate import check_seed
+
+    check_seed(proto.seed, "--seed", proto.episodes)  # every episode's seed + i, not only the first
     tasks = args.tasks or (list(proto.tasks) if proto.tasks else ["all"])
     tasks = sorted(TASKS) if tasks == ["all"] else tasks
     unknown = [t for t in tasks if t not in TASKS]
@@ -107,13 +116,74 @@ def run(args) -> int:
         raise UserError("--policy is required (expert | zero | random | lerobot:PATH_OR_ID | openpi:HOST:PORT)")
     if not args.out:
         raise UserError("--out RUN/ is required")
+    from realm_ms.eval.rundir import check_run_paths
+
+    check_run_paths(args.out, args.videos)  # before a policy loads or an env is built
+    check_policy_spec(args.policy)
+    if args.ray_address:
+        check_ray_address(args.ray_address)
     os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
     proto, tasks, perts = resolve(args)
     return evaluate(
         args.policy, tasks, perts, proto, args.out, workers=args.workers, backend=args.backend, ray_address=args.ray_address,
         camera_size=_parse_size(args.camera_size), videos=args.videos, quality=not args.no_quality, progress=not args.no_progress,
-        policy_options=dict(openpi_format=args.openpi_format, openpi_wait_s=args.openpi_wait, device=args.device),
+        policy_options=dict(openpi_format=args.openpi_format, openpi_wait_s=args.openpi_wait, device=args.device, action_space=args.action_space),
     )
+
+
+def check_policy_spec(spec: str) -> None:
+    """A policy spec that cannot work fails here, in one line, before anything loads: ``lerobot:``
+    without an argument, or naming a local path that does not exist (not a Hub lookup)."""
+    from realm_ms.errors import UserError
+
+    kind, sep, arg = spec.partition(":")
+    if kind == "lerobot":
+        if not arg.strip():
+            raise UserError("--policy lerobot: needs a checkpoint: lerobot:PATH (a local directory) or lerobot:OWNER/NAME (a Hub repo id)")
+        looks_local = arg.startswith(("/", ".", "~")) or arg.count("/") >= 2 or arg.endswith("/") or "\\" in arg
+        path = Path(arg).expanduser()
+        if looks_local and not path.exists():
+            raise UserError(f"--policy lerobot:{arg}: no such checkpoint directory {path} (a Hub repo id is OWNER/NAME)")
+        if path.exists() and not path.is_dir():
+            raise UserError(f"--policy lerobot:{arg}: {path} is a file; give the checkpoint directory (with config.json)")
+    elif kind == "openpi" and not arg:
+        raise UserError("--policy openpi needs the server address: openpi:HOST:PORT")
+
+
+def check_ray_address(address: str) -> None:
+    """``local``, ``auto`` or ``ray://HOST:PORT`` (Ray Client: needs ``ray[client]``)."""
+    import importlib.util
+
+    from realm_ms.errors import UserError
+
+    if importlib.util.find_spec("ray") is None:
+        raise UserError(f"--ray-address {address}: Ray is not installed (pip install 'ray[default]')")
+    if address.startswith("ray://"):
+        host, _, port = address[len("ray://"):].rpartition(":")
+        if not host:
+            raise UserError(f"--ray-address {address}: expected ray://HOST:PORT (e.g. ray://10.0.0.1:10001)")
+        from realm_ms.validate import check_port
+
+        check_port(port, f"--ray-address {address}: port")
+        if importlib.util.find_spec("grpc") is None:
+            raise UserError(f"--ray-address {address}: Ray Client needs the `ray[client]` extra (pip install 'ray[client]'), "
+                            "or run on a cluster node with --ray-address auto")
+
+
+def _connect_ray(address: str) -> None:
+    """Connect (as ``workers.run_ray`` would) so that a bad address is one line, not a traceback."""
+    import ray
+
+    from realm_ms.errors import UserError
+
+    if ray.is_initialized():
+        return
+    try:
+        ray.init(address=None if address == "local" else address, include_dashboard=False, log_to_driver=False,
+                 num_cpus=os.cpu_count() if address == "local" else None)
+    except (ConnectionError, ValueError, RuntimeError, TimeoutError) as e:
+        msg = " ".join(str(e).split())[:300]
+        raise UserError(f"--ray-address {address}: cannot connect to Ray ({type(e).__name__}: {msg})") from None
 
 
 def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: int | None = None, backend: str = "auto",
@@ -122,37 +192,49 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
     """Programmatic ``realm eval`` (used by the CLI, the demo and the expert bench)."""
     from realm_ms.errors import UserError
     from realm_ms.eval.metrics import compute_metrics
-    from realm_ms.eval.policies import make_policy
+    from realm_ms.eval.policies import make_policy, policy_action_space
     from realm_ms.eval.protocol import plan
-    from realm_ms.eval.records import RecordWriter, read_records
+    from realm_ms.eval.records import RecordWriter, format_problems, read_records
+    from realm_ms.eval.rundir import check_records, check_run_json, check_run_paths, fingerprint, write_run_json
     from realm_ms.eval.runner import RunConfig, default_workers, run_plan
     from realm_ms.eval.workers import choose_backend, run_ray
     from realm_ms.registry import UnknownNameError
+    from realm_ms.validate import check_seed
 
+    out = check_run_paths(Path(out), videos)  # before the policy loads: a bad --out never costs a model load
+    check_seed(proto.seed, "--seed", proto.episodes)
     policy_options = policy_options or {}
     try:
         policy = make_policy(policy_spec, **policy_options)
     except (ValueError, OSError, UnknownNameError, ImportError) as e:
         raise UserError(f"cannot load policy {policy_spec!r}: {e}") from None
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    meta_path = out / "run.json"
-    meta = dict(policy=policy.spec(), protocol=proto.name, tasks=tasks, perturbations=perturbations, episodes=proto.episodes,
-                seed=proto.seed, max_steps=proto.max_steps, replan_every=proto.replan_every, success_tail=proto.success_tail)
-    if meta_path.exists():
-        old = json.loads(meta_path.read_text())
-        for k in ("policy", "max_steps", "replan_every"):
-            if old.get(k) != meta[k]:
-                raise UserError(f"{out} holds a run with {k}={old.get(k)!r}, this command has {meta[k]!r}: use another --out")
-    meta_path.write_text(json.dumps(meta, indent=2))
     req = policy.obs_request()
     if camera_size:
         req.width, req.height = camera_size
     cfg = RunConfig(policy=policy.spec(), env_side=policy.env_side, max_steps=proto.max_steps, replan_every=proto.replan_every,
                     success_tail=proto.success_tail, obs=req, videos=videos, videos_dir=str(out / "videos"), quality=quality,
-                    env_kwargs=env_kwargs or {})
-    writer = RecordWriter(out / "records.jsonl")
-    done = writer.finished_keys()
+                    env_kwargs=policy_action_space(policy, policy_options) | (env_kwargs or {}))
+    # the run directory contract (rundir.py): run.json and every record carry this fingerprint
+    fp = fingerprint(policy.spec(), proto, cfg)
+    problems: list[str] = []
+    try:
+        check_run_json(out, fp)
+        _, done = check_records(out, fp, problems)
+        out.mkdir(parents=True, exist_ok=True)
+        write_run_json(out, dict(policy=policy.spec(), protocol=proto.name, tasks=tasks, perturbations=perturbations,
+                                 episodes=proto.episodes, seed=proto.seed, max_steps=proto.max_steps,
+                                 replan_every=proto.replan_every, success_tail=proto.success_tail, fingerprint=fp))
+        writer = RecordWriter(out / "records.jsonl")
+    except BaseException:
+        policy.close()
+        raise
+    if problems:
+        print(f"realm eval: warning: {len(problems)} line(s) of {out / 'records.jsonl'} are not records: skipped, "
+              f"not counted (an episode among them runs again):\n{format_problems(problems)}", file=sys.stderr)
+
+    def append(rec: dict) -> None:
+        writer.append({**rec, "fingerprint": fp})
+
     keys = [k for k in plan(tasks, perturbations, proto.episodes, proto.seed) if k not in done]
     if not quiet:
         print(f"realm eval: {policy.spec()} on {len(tasks)} task(s) x {len(perturbations)} perturbation(s) x {proto.episodes} episode(s); "
@@ -160,14 +242,15 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
     n_workers = workers or default_workers()
     try:
         if keys and ray_address:
-            run_ray(keys, policy.spec(), policy_options, cfg, ray_address, writer.append, progress_bar=progress)
+            _connect_ray(ray_address)
+            run_ray(keys, policy.spec(), policy_options, cfg, ray_address, append, progress_bar=progress)
         elif keys:
             try:
                 be = choose_backend(backend, cfg, min(n_workers, len(keys)))
             except RuntimeError as e:
                 raise UserError(str(e)) from None
             try:
-                run_plan(keys, policy, be, writer.append, progress_bar=progress, replan_every=proto.replan_every)
+                run_plan(keys, policy, be, append, progress_bar=progress, replan_every=proto.replan_every)
             finally:
                 be.close()
     finally:
@@ -179,15 +262,45 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
     if not quiet:
         print(f"{o['episodes']} episodes: success {o['success_rate']:.3f} [{o['success_ci'][0]:.3f}, {o['success_ci'][1]:.3f}], "
               f"progression {o['mean_progression']:.3f}; errors {len(metrics['errors'])}; metrics in {out / 'metrics.json'}")
-    return 0
+    return _error_exit(metrics["errors"], out)
+
+
+def _error_exit(errors: list, out: Path) -> int:
+    """1, with where to look, when any episode of the run ended in an error record (a rerun of the
+    same command retries exactly those); 0 otherwise."""
+    if not errors:
+        return 0
+    cells = sorted({f"{e.get('task')} x {e.get('perturbation')}" for e in errors})
+    print(f"realm eval: {len(errors)} episode(s) ended in an error record, in {len(cells)} cell(s): {'; '.join(cells[:6])}"
+          f"{' ...' if len(cells) > 6 else ''}. The errors are in {out / 'metrics.json'} (\"errors\") and "
+          f"{out / 'records.jsonl'} (status \"error\"); rerun the same command to retry those episodes.", file=sys.stderr)
+    return 1
 
 
 def run_report(args) -> int:
     from realm_ms.errors import UserError
     from realm_ms.eval.report import write_report
 
-    if not (args.run_dir / "records.jsonl").exists():
+    from realm_ms.eval.records import format_problems, read_records
+    from realm_ms.eval.report import PAPER
+    from realm_ms.validate import check_output_path
+
+    if not args.run_dir.is_dir():
+        what = "is a file" if args.run_dir.exists() else "does not exist"
+        raise UserError(f"RUN {args.run_dir} {what}; give the run directory of `realm eval --out RUN`")
+    records_path = args.run_dir / "records.jsonl"
+    if not records_path.exists():
         raise UserError(f"{args.run_dir} has no records.jsonl (run `realm eval ... --out {args.run_dir}` first)")
-    path = write_report(args.run_dir, args.report_out or args.run_dir / "report.html", videos=args.report_videos, reference=args.reference)
+    if args.reference is not None and args.reference not in PAPER:
+        raise UserError(f"--reference {args.reference!r}: no paper numbers for it; known: {', '.join(PAPER)}")
+    out = check_output_path(args.report_out or args.run_dir / "report.html", "--out", "file", example="report.html")
+    check_output_path(out.parent / (out.stem + "_files"), "--out (its figures directory)", "dir")
+    problems: list[str] = []
+    if not read_records(records_path, problems):
+        raise UserError(f"{records_path}: no readable records" + (f" ({problems[0]})" if problems else ""))
+    if problems:
+        print(f"realm eval report: warning: {len(problems)} line(s) are not records and are left out:\n{format_problems(problems)}",
+              file=sys.stderr)
+    path = write_report(args.run_dir, out, videos=args.report_videos, reference=args.reference)
     print(f"wrote {path}")
     return 0

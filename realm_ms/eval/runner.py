@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +25,7 @@ import numpy as np
 
 from realm_ms.eval.policies.policy import ObsRequest
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
+from realm_ms.eval.provenance import code_version
 
 VIDEO_CAMERAS = ("exterior_1", "wrist")
 
@@ -221,7 +223,9 @@ class EpisodeRunner:
 
 # ---------------------------------------------------------------------------------------- records
 def _base_record(cfg: RunConfig, key: EpisodeKey) -> dict:
-    return dict(task=key.task, perturbation=key.perturbation, seed=key.seed, policy=cfg.policy)
+    from realm_ms.agents.droid_action_spaces import action_space_name
+
+    return dict(task=key.task, perturbation=key.perturbation, seed=key.seed, policy=cfg.policy, action_space=action_space_name(cfg.env_kwargs))
 
 
 def advance_episode(ep, progression: float, stage_hits) -> None:
@@ -261,6 +265,7 @@ def episode_record(cfg: RunConfig, ep, status: str, skill, success: bool, stalle
         replan_every=cfg.replan_every,
         wall_s=round(time.perf_counter() - ep.t0, 3),
         quality=ep.quality.summary() if ep.quality is not None else None,
+        code_version=code_version(),  # package version + git revision: provenance for report headers
     )
     if error:
         rec["error"] = error
@@ -276,7 +281,13 @@ def _write_video(cfg: RunConfig, key: EpisodeKey, frames: list[np.ndarray]) -> s
     d = Path(cfg.videos_dir or "videos")
     d.mkdir(parents=True, exist_ok=True)
     path = d / f"{key.task}__{key.perturbation}__{key.seed}.mp4"
-    imageio.mimwrite(path, frames, fps=15, macro_block_size=8)
+    # H.264 in yuv420p needs even sizes: pad odd ones with a black row / column instead of letting
+    # imageio resize (stretch) every frame to its macro block, which it also warns about
+    h, w = frames[0].shape[:2]
+    pad = ((0, h % 2), (0, w % 2), (0, 0))
+    if h % 2 or w % 2:
+        frames = [np.pad(f, pad) for f in frames]
+    imageio.mimwrite(path, frames, fps=15, macro_block_size=1)
     return str(path)
 
 
@@ -311,6 +322,9 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
     active: dict[int, EpisodeKey] = {}
     pending: dict[int, dict] = {}  # slot -> latest observation
 
+    def postfix() -> dict:
+        return dict(success=f"{prog.successes}/{prog.done}", errors=prog.errors, steps_s=f"{prog.steps_per_s():.1f}")
+
     def count_steps(slot: int, steps: int) -> None:
         prev = pending.get(slot, {}).get("steps", 0) or 0
         prog.env_steps += max(0, int(steps or 0) - prev)
@@ -323,8 +337,11 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
         prog.done += 1
         prog.successes += int(bool(rec.get("success")))
         prog.errors += int(rec.get("status") == "error")
+        if rec.get("status") == "error":  # shown the moment it happens, not at the end of the run
+            bar.write(f"error: {rec.get('task')} x {rec.get('perturbation')} seed {rec.get('seed')}: "
+                      f"{' '.join(str(rec.get('error', '')).split())[:200]}", file=sys.stderr)
         bar.update(1)
-        bar.set_postfix(success=f"{prog.successes}/{prog.done}", steps_s=f"{prog.steps_per_s():.1f}", refresh=False)
+        bar.set_postfix(postfix(), refresh=False)
 
     try:
         while queue or active:
@@ -360,7 +377,7 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
                 else:
                     count_steps(slot, obs.get("steps", 0))
                     pending[slot] = obs
-            bar.set_postfix(success=f"{prog.successes}/{prog.done}", steps_s=f"{prog.steps_per_s():.1f}", refresh=False)
+            bar.set_postfix(postfix(), refresh=False)
     finally:
         bar.close()
     return prog

@@ -20,6 +20,7 @@ class Expert:
 
         expert = make_expert(env)          # after env.reset(...)
         action = expert.act()              # (num_envs, 8) torch tensor, droid_joint_pos
+                                           # (or the env's DROID action space, see _in_action_space)
 
     ``reset()`` must be called after every ``env.reset`` (``run_episode`` does it).
     """
@@ -76,7 +77,18 @@ class Expert:
         dq = (q_ik - self.q_cmd).clamp(-self.max_joint_step, self.max_joint_step)
         self.q_cmd = self.q_cmd + dq
         g = torch.as_tensor([[t.grip] for t in targets], dtype=torch.float64)
-        return torch.cat([self.q_cmd, g], 1).float().to(self.env.device)
+        return self._in_action_space(torch.cat([self.q_cmd, g], 1)).float().to(self.env.device)
+
+    def _in_action_space(self, target: torch.Tensor) -> torch.Tensor:
+        """The joint target as an action of the env's DROID action space (joint velocity, Cartesian
+        velocity or pose, gripper velocity: ``DroidActionSpace.from_joint_target``)."""
+        conv = getattr(self.env, "droid_actions", None)
+        if conv is None:
+            return target
+        agent = self.env.agent
+        q = agent.arm_qpos.detach().cpu().double().numpy()
+        g = agent.gripper_position.detach().cpu().double().numpy()
+        return torch.as_tensor(conv.space.from_joint_target(target.numpy(), q, g, conv.ik))
 
     __call__ = act
 

@@ -19,8 +19,10 @@ def add_parser(sub) -> None:
     p.add_argument("--policy", default="expert", help="policy that acts (default: expert, the privileged scripted expert)")
     p.add_argument("--tasks", nargs="+", metavar="ID", help="REALM env ids, or 'all'")
     p.add_argument("--perturbations", nargs="+", default=["Default"], metavar="NAME", help="perturbation names (default: Default)")
-    p.add_argument("--episodes", type=int, help="episodes per (task, perturbation)")
-    p.add_argument("--seed", type=int, default=0, help="episode k of each (task, perturbation) uses seed + k")
+    from realm_ms.validate import seed
+
+    p.add_argument("--episodes", type=int, help="episodes per (task, perturbation), >= 1")
+    p.add_argument("--seed", type=seed(), default=0, help="episode k of each (task, perturbation) uses seed + k; in [0, 2**32)")
     p.add_argument("--out", type=Path, required=True, help="dataset root (created, or resumed if it holds a dataset)")
     p.add_argument("--repo-id", default=None, help="dataset repo id (default: realm/<out dir name>)")
     p.add_argument("--success-only", action="store_true", help="drop failed episodes (and try further seeds)")
@@ -33,7 +35,7 @@ def add_parser(sub) -> None:
                    help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
     p.add_argument("--from-eval", type=Path, default=None, metavar="RUN",
                    help="re-simulate the episodes of a `realm eval` run (its records.jsonl) instead of --tasks")
-    p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes (resume granularity)")
+    p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes, >= 1 (resume granularity)")
     p.set_defaults(func=run)
 
 
@@ -46,16 +48,20 @@ def run(args) -> int:
         raise UserError("give --tasks and --episodes (or --from-eval RUN)")
     if args.from_eval is not None and args.tasks:
         raise UserError("--from-eval takes its tasks from the run's records; drop --tasks")
+    if args.from_eval is not None and args.episodes is not None:
+        raise UserError("--from-eval exports one episode per record of the run; drop --episodes")
     tasks = args.tasks or []
+    if "all" in tasks and len(tasks) > 1:
+        raise UserError("--tasks all stands alone; drop the other task ids")
     if tasks == ["all"]:
         from realm_ms.tasks import TASKS
 
         tasks = sorted(TASKS)
     try:
         cfg = ExportConfig(
-            out=args.out, tasks=tasks, episodes=args.episodes or 1, perturbations=args.perturbations, seed=args.seed,
+            out=args.out, tasks=tasks, episodes=1 if args.episodes is None else args.episodes, perturbations=args.perturbations, seed=args.seed,
             policy=args.policy, repo_id=args.repo_id, success_only=args.success_only, width=args.width,
-            height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=max(1, args.commit_every),
+            height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=args.commit_every,
         )
         summary = export_eval_run(args.from_eval, cfg) if args.from_eval is not None else export_dataset(cfg)
     except (ExportError, UnknownNameError) as e:

@@ -16,6 +16,7 @@ and a rerun skips them. A dataset card (``README.md``) is written at the end.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -48,12 +49,26 @@ class ExportConfig:
     progress: bool = True
 
     def __post_init__(self):
+        from realm_ms.validate import InputError, check_seed
+
         self.out = Path(self.out)
-        self.repo_id = self.repo_id or f"realm/{self.out.name}"
-        if self.episodes < 1:
-            raise ExportError(f"--episodes must be >= 1 (got {self.episodes})")
+        if self.repo_id is None:
+            self.repo_id = f"realm/{_repo_name(self.out.resolve().name)}"
+        check_repo_id(self.repo_id)
+        for name, flag in (("episodes", "--episodes"), ("commit_every", "--commit-every")):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ExportError(f"{flag} must be >= 1 (got {v!r})")
+        if self.max_steps is not None and (isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1):
+            raise ExportError(f"--max-steps must be >= 1 (got {self.max_steps!r}); leave it out for the task horizon")
         if self.width < 16 or self.height < 16:
             raise ExportError(f"image size {self.width}x{self.height} is too small (>= 16x16)")
+        if self.width > 4096 or self.height > 4096:
+            raise ExportError(f"image size {self.width}x{self.height} is too large (<= 4096x4096)")
+        try:
+            check_seed(self.seed, "--seed", self.max_attempts())
+        except InputError as e:
+            raise ExportError(str(e)) from None
 
     def max_attempts(self) -> int:
         return 2 * self.episodes + 10 if self.success_only else self.episodes
@@ -72,6 +87,38 @@ class EpisodeRecord:
     kept: bool
     episode_index: int | None = None  # index in the dataset when kept
     params: list | None = None  # the drawn perturbation parameters per sub-env (info["perturbation"]["params"])
+
+
+# Hugging Face Hub repo ids: OWNER/NAME, letters, digits, '-', '_', '.'; no '--' or '..'; <= 96 chars
+_REPO_PART = re.compile(r"^[A-Za-z0-9](?:[A-Za-z0-9._-]*[A-Za-z0-9])?$")
+
+
+def check_repo_id(repo_id: str) -> str:
+    """A Hub repo id ``OWNER/NAME`` (it goes into the dataset card and ``push_to_hub``)."""
+    parts = repo_id.split("/") if isinstance(repo_id, str) else []
+    ok = (len(parts) == 2 and all(_REPO_PART.match(p) for p in parts) and "--" not in repo_id and ".." not in repo_id
+          and len(repo_id) <= 96)
+    if not ok:
+        raise ExportError(f"--repo-id {repo_id!r} is not a Hub repo id: OWNER/NAME of letters, digits, '-', '_', '.' "
+                          "(no '--' or '..', at most 96 characters), e.g. realm/pick_apple_demos")
+    return repo_id
+
+
+def _repo_name(name: str) -> str:
+    """The default NAME of ``realm/NAME`` from the output directory's name, made a valid repo name."""
+    name = re.sub(r"[^A-Za-z0-9._-]+", "_", name)
+    name = re.sub(r"([-.])\1+", r"\1", name).strip("._-")[:90]
+    return name or "dataset"
+
+
+def check_out(cfg: ExportConfig) -> None:
+    """``--out`` can hold the dataset: checked before any episode runs."""
+    from realm_ms.validate import check_output_path
+
+    check_output_path(cfg.out, "--out", "dir")
+    info = cfg.out / "meta" / "info.json"
+    if cfg.out.is_dir() and any(cfg.out.iterdir()) and not info.is_file():
+        raise ExportError(f"{cfg.out} exists and is not a LeRobot dataset (no meta/info.json); choose an empty or new --out")
 
 
 def read_sidecar(root: Path) -> list[dict]:
@@ -310,6 +357,7 @@ def export_dataset(cfg: ExportConfig) -> dict:
     (``root``, ``repo_id``, ``written``, ``dropped``, ``already``, ``total_episodes``, ``episodes``)."""
     if not cfg.tasks:
         raise ExportError("no tasks given")
+    check_out(cfg)
     cfg.perturbations = validate_tasks(cfg.tasks, cfg.perturbations)
     writer, done = _open(cfg)
     return _run(cfg, writer, done, plan(cfg, done))
@@ -321,8 +369,11 @@ def export_eval_run(run_dir: Path, cfg: ExportConfig) -> dict:
     for deterministic policies: the scripted expert, LeRobot policies without sampling)."""
     from realm_ms.eval.records import read_records
 
+    check_out(cfg)
     path = Path(run_dir) / "records.jsonl" if Path(run_dir).is_dir() else Path(run_dir)
-    records = read_records(path)
+    if not path.exists():
+        raise ExportError(f"--from-eval: {path} does not exist; give the run directory of `realm eval --out RUN`")
+    records = [r for r in read_records(path) if isinstance(r.get("policy"), str)]
     if not records:
         raise ExportError(f"{path}: no realm eval records found")
     cfg.tasks = sorted({r["task"] for r in records})

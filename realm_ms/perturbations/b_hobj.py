@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from realm_ms.perturbations.perturbation import Perturbation, as_float
+from realm_ms.tasks.perturbation import Perturbation, as_float
 
 LOG_RANGE = (-1.0, 1.0)
 MAX_MASS = 2.0  # kg

@@ -19,11 +19,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     ls.set_defaults(func=_list)
     sh = sub.add_parser("sheet", help="one image per perturbation (exterior + wrist camera) for a task")
     sh.add_argument("--task", action="append", required=True, help="env id (repeat for several; 'all' for every task)")
+    from realm_ms.rendering import SHADERS  # the one shader table
+    from realm_ms.validate import integer, seed
+
     sh.add_argument("--out", required=True, help="PNG path (with several tasks: one file per task, the id appended)")
-    sh.add_argument("--seed", type=int, default=0, help="seed of the perturbation draws, integer (default 0)")
-    sh.add_argument("--width", type=int, default=320, help="image width per tile in pixels (default 320)")
-    sh.add_argument("--height", type=int, default=180, help="image height per tile in pixels (default 180)")
-    sh.add_argument("--shader", default="default", help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
+    sh.add_argument("--seed", type=seed(), default=0, help="seed of the perturbation draws, an integer in [0, 2**32) (default 0)")
+    sh.add_argument("--width", type=integer(16, 4096), default=320, help="image width per tile in pixels, 16-4096 (default 320)")
+    sh.add_argument("--height", type=integer(16, 4096), default=180, help="image height per tile in pixels, 16-4096 (default 180)")
+    sh.add_argument("--shader", default="default", choices=SHADERS,
+                    help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
     sh.set_defaults(func=_sheet)
     p.set_defaults(func=lambda a: (p.print_help(), 2)[1])
 
@@ -39,9 +43,21 @@ def _list(args) -> int:
     if args.json:
         print(json.dumps(rows, indent=1))
         return 0
-    print(f"{'id':>2s}  {'name':9s} {'when':12s} {'changes':60s} ranges")
+    import shutil
+    import textwrap
+
+    # the "changes" and "ranges" columns wrap to the terminal (never cut): 27 columns of id/name/when
+    width = max(100, shutil.get_terminal_size((120, 24)).columns)
+    wc = (width - 28) // 2
+    print(f"{'id':>2s}  {'name':9s} {'when':12s} {'changes':{wc}s} ranges")
     for r in rows:
-        print(f"{r['id']:2d}  {r['name']:9s} {r['when']:12s} {r['acts_on'][:60]:60s} {r['ranges']}")
+        changes = textwrap.wrap(r["acts_on"], wc, break_on_hyphens=False) or [""]
+        ranges = textwrap.wrap(str(r["ranges"]), width - 28 - wc, break_on_hyphens=False) or [""]
+        for k in range(max(len(changes), len(ranges))):
+            head = f"{r['id']:2d}  {r['name']:9s} {r['when']:12s}" if k == 0 else " " * 26
+            c = changes[k] if k < len(changes) else ""
+            g = ranges[k] if k < len(ranges) else ""
+            print(f"{head} {c:{wc}s} {g}".rstrip())
     return 0
 
 
@@ -53,16 +69,23 @@ def _sheet(args) -> int:
     realm_ms.register_envs()
     from realm_ms.tasks import TASKS
 
-    tasks = sorted(TASKS) if "all" in args.task else args.task
+    from realm_ms.validate import check_output_path
+
+    tasks = sorted(TASKS) if "all" in args.task else list(dict.fromkeys(args.task))  # a task given twice is one sheet
     unknown = [t for t in tasks if t not in TASKS]
     if unknown:
         raise UserError(f"unknown task {unknown[0]!r}; known: {', '.join(sorted(TASKS))}")
-    if args.width < 16 or args.height < 16:
-        raise UserError("--width and --height must be at least 16 pixels")
     out = Path(args.out)
+    if out.suffix.lower() not in (".png", ".jpg", ".jpeg", ""):
+        raise UserError(f"--out {out}: the sheet is an image; give a .png (or .jpg) path")
+    paths = [out if len(tasks) == 1 else out.with_name(f"{out.stem}_{task}{out.suffix or '.png'}") for task in tasks]
+    if len(tasks) == 1 and not out.suffix:
+        paths = [out.with_suffix(".png")]
+    for path in paths:  # all of them before the first (slow) render
+        check_output_path(path, "--out", "file", example="sheet.png")
     out.parent.mkdir(parents=True, exist_ok=True)
-    for task in tasks:
-        path = out if len(tasks) == 1 else out.with_name(f"{out.stem}_{task}{out.suffix or '.png'}")
+    for task, path in zip(tasks, paths):
+        # a user catalog too small for a perturbation raises common.CatalogTooSmall (an InputError): one line
         contact_sheet(task, path, seed=args.seed, size=(args.width, args.height), shader=args.shader)
         print(f"wrote {path}")
     return 0

@@ -9,6 +9,7 @@ from functools import lru_cache
 import numpy as np
 
 from realm_ms.tasks.task_spec import SceneObject, TaskSpec
+from realm_ms.validate import InputError
 
 # the instruction's phrase for the main / target object where the slot name is not it
 MAIN_NOUNS = {
@@ -83,11 +84,48 @@ def graspable(extents) -> bool:
     return float(min(e[0], e[1])) <= GRASPABLE_WIDTH and float(e.min()) >= GRASPABLE_MIN
 
 
-def sample_ids(rng: np.random.Generator, n: int, **filters) -> list[str]:
-    """``n`` catalog ids (the built catalog, else the procedural one) drawn by category."""
+class CatalogTooSmall(InputError):
+    """The object catalog in use holds fewer matching objects than a perturbation draws."""
+
+
+SAMPLING_OPTIONS = ("by", "distinct_categories", "catalog", "query")  # sample_objects keywords that are not filters
+
+
+def sample_ids(rng: np.random.Generator, n: int, who: str | None = None, **filters) -> list[str]:
+    """``n`` catalog ids (the built catalog, else the procedural one) drawn by category. Too few
+    matches in a user catalog raise :class:`CatalogTooSmall` naming the missing categories
+    (``who``: the perturbation, for the message)."""
     from realm_ms.assets import sample_objects
 
-    return [o.id for o in sample_objects(n, rng, **filters)]
+    try:
+        return [o.id for o in sample_objects(n, rng, **filters)]
+    except ValueError as e:
+        if not str(e).startswith("only "):
+            raise
+        raise CatalogTooSmall(_too_small_message(n, who, filters)) from None
+
+
+def _too_small_message(n: int, who: str | None, filters: dict) -> str:
+    """What the catalog lacks, against the procedural set (which has every REALM category)."""
+    from realm_ms.assets import ObjectQuery, load_catalog
+    from realm_ms.assets.catalog import ProceduralCatalog
+    from realm_ms.assets.paths import ENV_CATALOG, default_catalog_dir
+
+    fields = {k: ((v,) if isinstance(v, str) and k != "seen" else tuple(v) if isinstance(v, (list, set)) else v)
+              for k, v in filters.items() if k not in SAMPLING_OPTIONS}
+    q = ObjectQuery(**fields)
+    cat = load_catalog()
+    have = {k: v for k, v in cat.candidates(q).items() if v}
+    missing = sorted(set(ProceduralCatalog(1).candidates(q)) - set(have))
+    distinct = bool(filters.get("distinct_categories"))
+    what = ", ".join(f"{k}={'|'.join(map(str, v)) if isinstance(v, tuple) else v}" for k, v in fields.items() if v not in ((), None))
+    root = getattr(cat, "root", default_catalog_dir())
+    shown = ", ".join(missing[:12]) + (f" and {len(missing) - 12} more" if len(missing) > 12 else "")
+    return (f"{who or 'a perturbation'} draws {n} object(s){' of different categories' if distinct else ''} ({what}), but the "
+            f"catalog at {root} has {sum(map(len, have.values()))} in {len(have)} categor{'y' if len(have) == 1 else 'ies'}"
+            f"{' (' + ', '.join(sorted(have)) + ')' if have else ''}; missing categories: {shown or 'none known'}; add them with "
+            f"`realm assets build --source procedural --out {root}` (it merges into the catalog), or unset ${ENV_CATALOG} "
+            "to use the procedural catalog")
 
 
 @lru_cache(maxsize=None)

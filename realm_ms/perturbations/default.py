@@ -1,6 +1,6 @@
 """0 Default: the unperturbed task (the empty composition)."""
 
-from realm_ms.perturbations.perturbation import Perturbation
+from realm_ms.tasks.perturbation import Perturbation
 
 
 class Default(Perturbation):

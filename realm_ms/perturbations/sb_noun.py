@@ -22,7 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from realm_ms.perturbations.perturbation import Perturbation
+from realm_ms.tasks.perturbation import Perturbation
 from realm_ms.perturbations.common import graspable, main_noun, object_spec, replace_noun, set_query, slot_noun, with_object
 from realm_ms.tasks.task_spec import SceneObject
 

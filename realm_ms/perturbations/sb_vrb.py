@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from realm_ms.perturbations.perturbation import Perturbation
+from realm_ms.tasks.perturbation import Perturbation
 from realm_ms.perturbations.common import WIDE_REGION, catalog_extents, main_noun, object_spec, set_query, target_noun, widened, with_object
 from realm_ms.tasks.progression import Thresholds
 from realm_ms.tasks.skills import as_skill

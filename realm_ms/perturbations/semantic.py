@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from realm_ms.perturbations.perturbation import Perturbation
+from realm_ms.tasks.perturbation import Perturbation
 
 
 def variants(env_id: str, factor: str) -> tuple[str, ...]:

@@ -11,7 +11,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from realm_ms.perturbations.perturbation import Perturbation, as_float
+from realm_ms.tasks.perturbation import Perturbation, as_float
 
 SIGMA = (0.0, 2.5)
 ALPHA = (0.25, 1.5)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from realm_ms.perturbations.perturbation import Perturbation, as_float
+from realm_ms.tasks.perturbation import Perturbation, as_float
 
 INTENSITY = (20_000.0, 750_000.0)
 I_REF = float(np.sqrt(INTENSITY[0] * INTENSITY[1]))  # 122,474

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from realm_ms.perturbations.perturbation import Perturbation
+from realm_ms.tasks.perturbation import Perturbation
 from realm_ms.perturbations.common import cap_scale, widened, categories_of, object_spec, sample_ids
 from realm_ms.tasks.task_spec import SceneObject
 
@@ -34,14 +34,14 @@ class VSc(Perturbation):
     def draw(self, rng, ctx):
         spec = ctx.spec
         keep = categories_of(spec)
-        extras = sample_ids(rng, N_EXTRA, seen=False, exclude_categories=keep, distinct_categories=True)
+        extras = sample_ids(rng, N_EXTRA, who=self.name, seen=False, exclude_categories=keep, distinct_categories=True)
         swaps = {}
         for o in spec.objects:
             if o.role in ("main", "target") or o.asset.startswith("articulated/"):
                 continue
             theme = object_spec(o.asset).record.theme
             others = tuple(t for t in seen_themes() if t != theme)
-            swaps[o.name] = sample_ids(rng, 1, seen=True, themes=others, exclude_categories=keep)[0]
+            swaps[o.name] = sample_ids(rng, 1, who=self.name, seen=True, themes=others, exclude_categories=keep)[0]
         return dict(extras=extras, swaps=swaps)
 
     def edit_spec(self, spec, params, ctx):

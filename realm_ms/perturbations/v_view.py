@@ -12,7 +12,7 @@ from __future__ import annotations
 import torch
 from mani_skill.utils.structs.pose import Pose
 
-from realm_ms.perturbations.perturbation import Perturbation, as_float
+from realm_ms.tasks.perturbation import Perturbation, as_float
 
 SHIFT = 0.2  # m
 TURN = 0.2  # rad

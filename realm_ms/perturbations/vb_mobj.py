@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from realm_ms.perturbations.perturbation import Perturbation, as_float
+from realm_ms.tasks.perturbation import Perturbation, as_float
 from realm_ms.perturbations.common import graspable, is_articulated, object_spec, set_query, with_object
 
 SCALE = (0.5, 1.5)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from realm_ms.perturbations.perturbation import Perturbation, as_float
+from realm_ms.tasks.perturbation import Perturbation, as_float
 from realm_ms.tasks.placement import sample_placements
 from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
 

@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from realm_ms.perturbations.perturbation import Perturbation, as_float
+from realm_ms.tasks.perturbation import Perturbation, as_float
 from realm_ms.perturbations.common import cap_scale, categories_of, graspable, main_noun, object_spec, replace_noun, sample_ids, set_query, with_object
 
 MAX_EXTENT = 0.15

@@ -31,6 +31,26 @@ def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3) -> 
     return load_split(data, heldout, seed, heldout_fraction)
 
 
+def _space(trajs: list[Trajectory], space: str | None) -> str:
+    """``position`` (replay of q_cmd under the DROID controller) or ``torque`` (inverse-dynamics
+    residual of a torque log). Default: torque when the data has no q_cmd, else position."""
+    space = space or "auto"
+    if space not in ("auto", "position", "torque"):
+        raise InputError(f"space (--space): unknown space {space!r}; use position, torque or auto")
+    no_cmd = [t.name for t in trajs if t.q_cmd is None]
+    no_tau = [t.name for t in trajs if t.tau is None]
+    if space == "auto":
+        space = "torque" if no_cmd else "position"
+    if space == "position" and no_cmd:
+        raise DataError(f"{no_cmd[0]}: no q_cmd (commanded targets); the position-space replay needs them. "
+                        + ("It has tau: use --space torque (the inverse-dynamics residual)" if not no_tau else
+                           "Add q_cmd, or tau for torque-space work"))
+    if space == "torque" and no_tau:
+        raise DataError(f"{no_tau[0]}: no tau (measured joint torque, N·m); torque space needs it "
+                        + ("(or use --space position: the data has q_cmd)" if not no_cmd else "in every trajectory"))
+    return space
+
+
 def _model(model):
     from realm_ms.agents.robot_model import RobotModel
 
@@ -106,7 +126,8 @@ def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, 
     return _synth(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config))
 
 
-def compare(data, model=None, heldout=None, workers=None, device=None, segment_s: float = 8.0) -> dict:
+def compare(data, model=None, heldout=None, workers=None, device=None, segment_s: float = 8.0,
+            space: str | None = None) -> dict:
     """Replay DATA (all trajectories; plus ``heldout`` if given) with the model."""
     from realm_ms.sysid.data_io import load_dir
     from realm_ms.sysid.fit import compare as _compare
@@ -116,15 +137,28 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
     trajs = data if isinstance(data, list) else load_dir(data)
     if heldout is not None:
         trajs = trajs + load_dir(heldout)
+    if _space(trajs, space) == "torque":
+        from realm_ms.sysid.torque import verbs
+
+        return verbs.compare(trajs, m)
     out = _compare(trajs, m, segment_s=segment_s, evaluator=_evaluator(m, workers, device))
+    out["unit"] = "rad"
     return out
 
 
-def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print, **config) -> dict:
+def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print,
+             space: str | None = None, **config) -> dict:
     from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose as _diagnose
 
     train, held = _split(data, heldout, seed)
     m = _model(model)
+    if _space(train + held, space) == "torque":
+        from realm_ms.sysid.torque import verbs
+
+        cands = config.pop("candidates", None)
+        out = verbs.diagnose(train, held, m, cands, DiagnoseConfig(**config), log=log)
+        out["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
+        return out
     d = _diagnose(train, held, m, DiagnoseConfig(**config), _evaluator(m, workers, device), log=log)
     out = d.to_json()
     out["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
@@ -132,7 +166,7 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
 
 
 def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None,
-        device=None, progress: bool = True, log=print, **config) -> dict:
+        device=None, progress: bool = True, log=print, space: str | None = None, **config) -> dict:
     from datetime import datetime, timezone
 
     from realm_ms.sysid.fit import FitConfig, fit as _fit
@@ -148,6 +182,17 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
+    if _space(train + held, space) == "torque":
+        from realm_ms.sysid.torque import verbs
+
+        j = verbs.fit(train, held, add, m, refit=config.get("refit", True), log=log)
+        j["_model"].provenance.update({"data": str(data) if not isinstance(data, tuple) else "in-memory",
+                                       "space": "torque", "fitted": j["effects"], **_versions()})
+        if out is not None:
+            j["_model"].save(out)
+        j.pop("_terms", None)
+        j["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
+        return j
     res = _fit(train, held, m, FitConfig(add=add, seed=seed, **config), _evaluator(m, workers, device), progress, log)
     res.model.provenance.update({
         "data": str(data) if not isinstance(data, tuple) else "in-memory",
@@ -164,18 +209,57 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
     return j
 
 
+def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None, device=None,
+         progress: bool = True, log=print, space: str | None = None, **config) -> dict:
+    """diagnose -> fit the top suspect -> re-diagnose ... until the floor (``sysid/auto.py``)."""
+    from datetime import datetime, timezone
+
+    from realm_ms.sysid.auto import AutoConfig, auto as _auto
+    from realm_ms.validate import check_output_file
+
+    for key in ("generations", "max_steps"):
+        if key in config:
+            check_int(config[key], f"{key} (--{key.replace('_', '-')})", minimum=1)
+    if out is not None:
+        check_output_file(out, "out (--out)")
+    train, held = _split(data, heldout, seed)
+    m = _model(model)
+    if _space(train + held, space) == "torque":
+        from realm_ms.sysid.torque import verbs
+
+        res = verbs.auto(train, held, m, AutoConfig(seed=seed, **config), log)
+    else:
+        res = _auto(train, held, m, AutoConfig(seed=seed, **config), _evaluator(m, workers, device), progress, log)
+    fitted = res["_model"]
+    fitted.provenance.update({
+        "data": str(data) if not isinstance(data, tuple) else "in-memory",
+        "train": [t.name for t in train], "heldout": [t.name for t in held],
+        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "fitted": [s["effect"] for s in res["steps"]], "heldout_rmse_rad": res["final"]["heldout_rmse"],
+        **_versions(),
+    })
+    if out is not None:
+        fitted.save(out)
+    res["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
+    return res
+
+
 def report(data, model=None, out: str | Path = "report.html", heldout=None, seed: int = 0, diagnosis=None,
-           fit_result=None, workers=None, device=None, waterfall: bool = True, log=print) -> Path:
+           fit_result=None, workers=None, device=None, waterfall: bool = True, log=print, auto_result=None) -> Path:
     from realm_ms.sysid.report import build_report
     from realm_ms.validate import check_output_file
 
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed)
+    if _space(train + held, None) == "torque":
+        raise DataError("report replays q_cmd under the DROID controller; this data has no q_cmd (a torque log). "
+                        "Use compare/diagnose/fit/auto --json for torque-space results")
     m = _model(model)
     diagnosis = _load_json(diagnosis, ("baseline", "suspects"), "diagnose --json")
     fit_result = _load_json(fit_result, ("history", "before", "after"), "fit --json")
+    auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")
     return build_report(train, held, m, Path(out), _evaluator(m, workers, device), diagnosis=diagnosis,
-                        fit_result=fit_result, waterfall=waterfall, data_name=str(data), log=log)
+                        fit_result=fit_result, waterfall=waterfall, data_name=str(data), log=log, auto=auto_result)
 
 
 def _load_json(obj, keys: tuple[str, ...], what: str):
@@ -204,4 +288,4 @@ def _versions() -> dict:
     return out
 
 
-__all__ = ["effects", "excite", "synth", "compare", "diagnose", "fit", "report", "DataError"]
+__all__ = ["effects", "excite", "synth", "compare", "diagnose", "fit", "auto", "report", "DataError"]

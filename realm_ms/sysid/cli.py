@@ -1,4 +1,4 @@
-"""``realm sysid {effects,excite,synth,compare,diagnose,fit,report}``.
+"""``realm sysid {effects,excite,synth,compare,diagnose,fit,auto,report}``.
 
 Registered by ``realm_ms/cli.py`` through ``add_parser(subparsers)``; heavy imports stay inside
 the handlers. Bad input raises ``realm_ms.cli.UserError`` (one clear message, no traceback).
@@ -56,7 +56,26 @@ def _write_json(path: str | None, data: dict) -> None:
     print(f"wrote {p}", file=sys.stderr)
 
 
+def _show_data_warnings() -> None:
+    """Data warnings (``timeseries.DataWarning``) as one line on stderr, without Python's file:line."""
+    import warnings
+
+    from realm_ms.sysid.timeseries import DataWarning
+
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, DataWarning):
+            print(f"warning: {' '.join(str(message).split())}", file=sys.stderr)
+        else:
+            default(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show
+    warnings.simplefilter("always", DataWarning)
+
+
 def _check_data(path: str) -> None:
+    _show_data_warnings()
     if not Path(path).exists():
         raise _user_error(f"DATA {path!r} does not exist (an npz directory or a LeRobot v3.0 dataset)")
 
@@ -105,10 +124,23 @@ def _excite(args) -> int:
     return 0
 
 
+def _joined(specs: list[str] | str, flag: str) -> str:
+    """Repeated ``--add``/``--hidden`` flags accumulate: ``--add A --add B`` means ``--add A,B``
+    (argparse's default would silently keep only the last one)."""
+    if isinstance(specs, str):
+        return specs
+    parts = [s.strip() for s in specs if s.strip()]
+    if len(parts) > 1 and any(p.lower() == "none" for p in parts):
+        raise _user_error(f"{flag} none cannot be combined with other {flag} effects")
+    return ",".join(parts)
+
+
 def _synth(args) -> int:
     from realm_ms.sysid import api
 
     from realm_ms.sysid.effect_spec import parse_effects
+
+    args.hidden = _joined(args.hidden, "--hidden")
 
     if args.rate < args.control_hz:
         raise _user_error(f"--rate {args.rate:g} Hz is below the control rate --control-hz {args.control_hz:g} Hz")
@@ -131,8 +163,15 @@ def _compare(args) -> int:
     _check_outputs(args, files=("--json",))
     _check_model(args)
     with _user_input():
-        c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment)
+        c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space)
     names = [f"J{i}" for i in range(1, 8)]
+    if c["unit"] == "N·m":
+        print(f"torque space ({c['samples']} samples): inverse-dynamics residual RMSE {c['rmse_nm']:.3e} N·m, "
+              f"noise floor ≈ {c['noise_floor_nm']:.2e} N·m")
+        print("joint       " + " ".join(f"{n:>9}" for n in names))
+        print("RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in c["per_joint_rmse_nm"]))
+        _write_json(args.json, c)
+        return 0
     print(f"replay of {len(c['trajectories'])} trajectories: RMSE {c['rmse_rad']:.3e} rad, noise floor ≈ {c['noise_floor_rad']:.2e} rad")
     print("joint      " + " ".join(f"{n:>9}" for n in names))
     print("RMSE [rad] " + " ".join(f"{v:9.2e}" for v in c["per_joint_rmse_rad"]))
@@ -159,12 +198,13 @@ def _diagnose(args) -> int:
     _check_model(args)
     with _user_input():
         d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
-                         log=lambda m: print(m, file=sys.stderr), **kw)
+                         log=lambda m: print(m, file=sys.stderr), space=args.space, **kw)
     b = d["baseline"]
-    print(f"baseline held-out RMSE {b['heldout_rmse_rad']:.3e} rad, noise floor ≈ {b['noise_floor_rad']:.2e} rad")
+    u, sfx = ("N·m", "nm") if d.get("unit") == "N·m" else ("rad", "rad")
+    print(f"baseline held-out RMSE {b[f'heldout_rmse_{sfx}']:.3e} {u}, noise floor ≈ {b[f'noise_floor_{sfx}']:.2e} {u}")
     print(d["message"])
     for i, s in enumerate(d["suspects"][: args.top], 1):
-        print(f"{i:2d}. {s['effect']:<20} score {s['score']:+.2f}  held-out RMSE after {s['heldout_rmse_after_rad']:.2e} rad")
+        print(f"{i:2d}. {s['effect']:<20} score {s['score']:+.2f}  held-out RMSE after {s[f'heldout_rmse_after_{sfx}']:.2e} {u}")
         print(f"    {s['evidence']}")
     _write_json(args.json, d)
     return 0
@@ -176,6 +216,7 @@ def _fit(args) -> int:
     _check_data(args.data)
     _check_outputs(args, files=("--out", "--json", "--checkpoint"))
     _check_model(args)
+    args.add = _joined(args.add, "--add")
     with _user_input("--add: "):
         from realm_ms.sysid.effect_spec import parse_effects
 
@@ -184,9 +225,18 @@ def _fit(args) -> int:
         f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                     generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
-                    refit=not args.no_refit)
+                    refit=not args.no_refit, space=args.space)
     names = [f"J{i}" for i in range(1, 8)]
     print(f"fitted {', '.join(f['effects'])} -> {args.out}")
+    if f.get("unit") == "N·m":
+        for k, v in f["params"].items():
+            print(f"  {k:<32} {v:.5g}")
+        for when in ("before", "after"):
+            m = f[when]
+            print(f"{when:<6} held-out [N·m] " + " ".join(f"{v:9.3f}" for v in m["per_joint_heldout_rmse_nm"])
+                  + f"  {m['heldout_rmse_nm']:9.3f}   (train {m['train_rmse_nm']:.3f})")
+        _write_json(args.json, f)
+        return 0
     for k, v in f["params"].items():
         print(f"  {k:<32} {v:.5g} {f['units'][k]}   bounds {f['bounds'][k]}")
     print("                     " + " ".join(f"{n:>9}" for n in names) + "      all")
@@ -198,6 +248,29 @@ def _fit(args) -> int:
     return 0
 
 
+def _auto(args) -> int:
+    from realm_ms.sysid import api
+
+    _check_data(args.data)
+    _check_outputs(args, files=("--out", "--json"))
+    _check_model(args)
+    with _user_input():
+        a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
+                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
+                     generations=args.generations, max_steps=args.max_steps, space=args.space)
+    f = a["final"]
+    u = a["unit"]
+    print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")
+    for s in a["steps"]:
+        print(f"  + {s['effect']:<20} -> {s['heldout_rmse']:.3e} {u}")
+    print(f"final {f['heldout_rmse']:.3e} {u}, noise floor {f['noise_floor']:.2e} {u}: {f['verdict']}")
+    print(a["details"]["message"])
+    if args.out:
+        print(f"model -> {args.out}")
+    _write_json(args.json, a)
+    return 0
+
+
 def _report(args) -> int:
     from realm_ms.sysid import api
 
@@ -206,7 +279,8 @@ def _report(args) -> int:
     _check_model(args)
     with _user_input():
         p = api.report(args.data, args.model, args.out, args.heldout, args.seed, args.diagnosis, args.fit,
-                       args.workers, args.device, waterfall=not args.no_waterfall, log=lambda m: print(m, file=sys.stderr))
+                       args.workers, args.device, waterfall=not args.no_waterfall, log=lambda m: print(m, file=sys.stderr),
+                       auto_result=args.auto)
     print(f"wrote {p}")
     return 0
 
@@ -225,6 +299,13 @@ def _common(p: argparse.ArgumentParser, heldout: bool = True) -> None:
                    help="CPU worker processes, integer >= 1 (default: $REALM_SYSID_WORKERS or min(2, cores))")
     p.add_argument("--device", choices=["cpu", "cuda"], default=None,
                    help="simulation device (default: cuda if a GPU is available, else cpu)")
+
+
+def _space_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--space", choices=("auto", "position", "torque"), default="auto",
+                   help="position: replay q_cmd under the DROID controller (rad); torque: inverse-dynamics residual "
+                        "of measured tau (N·m, any controller, no q_cmd needed); auto (default): torque when the "
+                        "data has no q_cmd")
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -251,8 +332,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.set_defaults(func=_excite)
 
     s = sub.add_parser("synth", help="measured-like data with a hidden effect, from the simulator")
-    s.add_argument("--hidden", required=True, help="EFFECT[:param=value,...][,EFFECT...] or none "
-                   "(values in the units of `realm sysid effects`)")
+    s.add_argument("--hidden", required=True, action="append", help="EFFECT[:param=value,...][,EFFECT...] or none "
+                   "(values in the units of `realm sysid effects`); repeat to hide several effects")
     s.add_argument("--out", required=True, metavar="DIR", help="output directory: train/, heldout/, truth.yaml, synth.json")
     s.add_argument("--seed", type=integer(0), default=0, help="random seed, integer >= 0 (default 0)")
     s.add_argument("--noise", type=non_negative("rad"), default=2e-4, help="sensor noise std in rad, >= 0 (default 2e-4)")
@@ -273,6 +354,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--segment", type=positive("s"), default=8.0,
                    help="multiple-shooting segment length in s, > 0 (default 8)")
     s.add_argument("--json", metavar="FILE", help="also write the result as JSON to FILE")
+    _space_arg(s)
     s.set_defaults(func=_compare)
 
     s = sub.add_parser("diagnose", help="rank the missing effects by held-out improvement")
@@ -281,12 +363,14 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--candidates", help="comma-separated effect names (default: all; see `realm sysid effects`)")
     s.add_argument("--top", type=integer(1), default=5, help="suspects to print, integer >= 1 (default 5)")
     s.add_argument("--json", metavar="FILE", help="also write the diagnosis as JSON to FILE")
+    _space_arg(s)
     s.set_defaults(func=_diagnose)
 
     s = sub.add_parser("fit", help="add effects and fit their parameters with CMA-ES")
     s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")
-    s.add_argument("--add", required=True, help="EFFECT[:param=start,...][,EFFECT...] (start values in the units of "
-                   "`realm sysid effects`)")
+    s.add_argument("--add", required=True, action="append", help="EFFECT[:param=start,...][,EFFECT...] (start values "
+                   "in the units of `realm sysid effects`); repeat to add several effects (--add A --add B is "
+                   "--add A,B; an effect given twice is an error)")
     s.add_argument("--out", required=True, metavar="MODEL.yaml", help="robot model file to write (not a directory)")
     _common(s)
     s.add_argument("--generations", type=integer(1), default=30, help="CMA-ES generations at most, integer >= 1 (default 30)")
@@ -296,6 +380,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--no-refit", action="store_true", help="keep the --model's own parameters fixed (default: refit them jointly)")
     s.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     s.add_argument("--json", metavar="FILE", help="also write the fit result (history, before/after) as JSON to FILE")
+    _space_arg(s)
     s.set_defaults(func=_fit)
 
     s = sub.add_parser("report", help="one self-contained HTML page: where the model fails, suspects, fit")
@@ -305,5 +390,18 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--diagnosis", metavar="FILE", help="diagnose --json output to include (else computed)")
     s.add_argument("--fit", metavar="FILE", help="fit --json output to include (history, before/after)")
     s.add_argument("--no-waterfall", action="store_true", help="skip the effect-by-effect held-out waterfall")
+    s.add_argument("--auto", metavar="FILE", help="auto --json output to include (its waterfall)")
     s.set_defaults(func=_report)
+
+    s = sub.add_parser("auto", help="diagnose, fit the top suspect, re-diagnose ... until the noise floor")
+    s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")
+    s.add_argument("--out", metavar="MODEL.yaml", help="robot model file to write (the final model)")
+    _common(s)
+    s.add_argument("--generations", type=integer(1), default=10,
+                   help="CMA-ES generations per fit, integer >= 1 (default 10)")
+    s.add_argument("--max-steps", type=integer(1), default=4, help="effects to add at most, integer >= 1 (default 4)")
+    s.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    s.add_argument("--json", metavar="FILE", help="write the steps, final verdict and friction curve as JSON to FILE")
+    _space_arg(s)
+    s.set_defaults(func=_auto)
     return p

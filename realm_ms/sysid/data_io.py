@@ -25,7 +25,7 @@ import numpy as np
 
 from realm_ms.sysid.timeseries import DataError, Trajectory, validate
 
-NPZ_REQUIRED = ("t", "q", "q_cmd")
+NPZ_REQUIRED = ("t", "q")  # + q_cmd (position space) or tau (torque space)
 
 
 def joint_limits() -> np.ndarray:
@@ -50,10 +50,13 @@ def read_npz(path: Path) -> Trajectory:
     except Exception as e:  # noqa: BLE001 - any unreadable file is a user error
         raise DataError(f"{path}: cannot read as .npz ({type(e).__name__}: {' '.join(str(e).split())})") from None
     missing = [k for k in NPZ_REQUIRED if k not in data]
+    if "q_cmd" not in data and "tau" not in data:
+        missing.append("q_cmd")
     if missing:
-        raise DataError(f"{path}: missing key(s) {missing}; an .npz trajectory needs t (T,), q (T,7), q_cmd (T,7)")
+        raise DataError(f"{path}: missing key(s) {missing}; an .npz trajectory needs t (T,), q (T,7) and q_cmd (T,7) "
+                        "(commanded targets), or tau (T,7) (measured joint torque, for torque-space work)")
     return Trajectory(
-        path.stem, data["t"], data["q"], data["q_cmd"], data.get("qd"), data.get("tau"),
+        path.stem, data["t"], data["q"], data.get("q_cmd"), data.get("qd"), data.get("tau"),
         data.get("gripper"), data.get("gripper_cmd"), data.get("control_hz"), meta={"file": str(path)},
     )
 
@@ -70,8 +73,8 @@ def _is_text(path: Path) -> bool:
 
 def write_npz(path: Path, traj: Trajectory) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    arrays = {"t": traj.t, "q": traj.q, "q_cmd": traj.q_cmd}
-    for k in ("qd", "tau", "gripper", "gripper_cmd"):
+    arrays = {"t": traj.t, "q": traj.q}
+    for k in ("q_cmd", "qd", "tau", "gripper", "gripper_cmd"):
         v = getattr(traj, k)
         if v is not None:
             arrays[k] = v

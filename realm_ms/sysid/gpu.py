@@ -43,7 +43,7 @@ class GpuReplaySimulator:
         self.profile = StepProfile()
 
     def _driver(self, num_envs: int, actuation: ActuationModel):
-        from realm_ms.agents.droid_controller import DroidArmDriver
+        from realm_ms.agents.control import DroidArmDriver
 
         return DroidArmDriver(self.model, self.config.control_config(), num_envs, self.device, actuation)
 
@@ -52,7 +52,7 @@ class GpuReplaySimulator:
         import sapien
         from sapien import physx
 
-        from realm_ms.agents.droid_controller import configure_arm_joints
+        from realm_ms.agents.control.maniskill import configure_arm_joints
 
         self.px = None
         self.arts = []

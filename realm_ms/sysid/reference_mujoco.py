@@ -123,7 +123,7 @@ class MujocoReference:
     """E independent MuJoCo arms; ``rollout`` has the replay simulator's signature."""
 
     def __init__(self, config: MujocoConfig | None = None):
-        from realm_ms.agents.droid_controller import GAIN_PRESETS, JOINT_PHYSICS_PRESETS, resolve
+        from realm_ms.agents.control import GAIN_PRESETS, JOINT_PHYSICS_PRESETS, resolve
         from realm_ms.sysid.locked_urdf import flange_offset_in_link7
 
         self.config = config or MujocoConfig()
@@ -233,13 +233,13 @@ class MujocoReference:
 
         from realm_ms.agents.actuation import ActuationModel
         from realm_ms.agents.arm_model import ArmModel
-        from realm_ms.agents.droid_controller import DroidArmDriver, DroidControlConfig
+        from realm_ms.agents.control import DroidArmDriver, DroidControlConfig
         from realm_ms.sysid.locked_urdf import BASE_LINK, TIP_LINK, source_urdf_path
 
         if self.config.free_joints is not None:
             raise ValueError("law='driver' needs all 7 joints free")
         cfg = DroidControlConfig(gains=self.gains, coriolis_feedforward=self.config.coriolis_feedforward,
-                                 gravity_compensation=self.config.gravity, implicit_damping=False,
+                                 gravity_compensation=self.config.gravity, integrator="explicit",
                                  joint_physics=self.joint_physics)
         model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
         act = ActuationModel(sorted(effects, key=lambda fx: fx.order))

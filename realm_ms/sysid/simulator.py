@@ -1,7 +1,7 @@
 """The replay simulator: many copies of the benchmark arm in one PhysX CPU scene, one batched driver.
 
 Same URDF (gripper locked, geometry dropped: ``urdf.py``), same joint setup (drive stiffness 0,
-implicit damping = ``driver.implicit_damping``, joint friction/armature preset), same
+drive damping = ``driver.drive_damping``, joint friction/armature preset), same
 ``DroidArmDriver`` (Polymetis law + actuation stages) and the same physics rate (120 Hz = 8
 substeps per 15 Hz step) as the benchmark, so an identified model is the model the benchmark runs.
 
@@ -37,7 +37,7 @@ class SimConfig:
     model_rate: str | None = None  # DroidControlConfig.model_rate; None = the benchmark's default
 
     def control_config(self):
-        from realm_ms.agents.droid_controller import DroidControlConfig
+        from realm_ms.agents.control import DroidControlConfig
 
         kw = {} if self.model_rate is None else {"model_rate": self.model_rate}
         return DroidControlConfig(gains=self.gains, coriolis_feedforward=self.coriolis_feedforward,
@@ -93,7 +93,7 @@ class ReplaySimulator:
 
     # ------------------------------------------------------------------ arm pool
     def _driver(self, num_envs: int, actuation: ActuationModel):
-        from realm_ms.agents.droid_controller import DroidArmDriver, DroidControlConfig
+        from realm_ms.agents.control import DroidArmDriver, DroidControlConfig
 
         cfg = DroidControlConfig(
             gains=self.config.gains, coriolis_feedforward=self.config.coriolis_feedforward, joint_physics=self.config.joint_physics
@@ -101,7 +101,7 @@ class ReplaySimulator:
         return DroidArmDriver(self.model, cfg, num_envs, "cpu", actuation)
 
     def _ensure(self, n: int) -> None:
-        from realm_ms.agents.droid_controller import configure_arm_joints
+        from realm_ms.agents.control.maniskill import configure_arm_joints
 
         if len(self.arms) >= n:
             return

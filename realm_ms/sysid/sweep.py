@@ -46,6 +46,8 @@ class CaseResult:
     floor_rad: float | None = None
     ranked_first: bool | None = None
     passed: bool | None = None
+    # diagnose's verdict code: no_missing_effect | found | partially_explained | unexplained
+    verdict_code: str = ""
 
 
 def run_case(effect: str, seed: int, engine: str = "mujoco", noise_rad: float = 1e-4, workdir: str | None = None,
@@ -67,7 +69,8 @@ def run_case(effect: str, seed: int, engine: str = "mujoco", noise_rad: float = 
         d = diagnose(train, held, evaluator=ev, log=quiet)
         row = CaseResult(effect, seed, engine, noise_rad, d.message, bool(d.missing_effect_found), bool(d.unexplained),
                          [s.effect for s in d.suspects[:3]], float(d.noise_floor), float(d.baseline_heldout_rmse),
-                         truth={k: float(v) for k, v in info["truth"].items()} if isinstance(info["truth"], dict) else {})
+                         truth={k: float(v) for k, v in info["truth"].items()} if isinstance(info["truth"], dict) else {},
+                         verdict_code=d.verdict)
         if effect != "none":
             f = fit(train, held, config=FitConfig(add=effect), evaluator=ev, progress=False, log=quiet)
             row.heldout_before_rad = float(f.before["heldout_rmse_rad"])
@@ -90,10 +93,13 @@ def judge(rows: list[CaseResult]) -> list[CaseResult]:
         r.floor_rad = max(r.noise_floor_rad, null.get(r.seed, 0.0))
         if r.effect == "none":
             r.ranked_first = None
-            r.passed = not r.missing_effect_found and not r.unexplained
+            r.passed = not r.missing_effect_found and not r.unexplained and r.verdict_code in ("", "no_missing_effect")
         else:
+            # the diagnosis names an effect when it is "found" (screened to the floor) or "partially
+            # explained" (the screening's one LM step left more; the fit below must reach the floor)
+            named = r.missing_effect_found or r.verdict_code == "partially_explained"
             top = r.ranked[0] if r.ranked else None
-            r.ranked_first = bool(r.missing_effect_found and top is not None
+            r.ranked_first = bool(named and top is not None
                                   and (top == r.effect or top in confounded_with(r.effect)))
             r.passed = bool(r.ranked_first and r.heldout_after_rad is not None
                             and r.heldout_after_rad <= FLOOR_FACTOR * r.floor_rad)
@@ -152,7 +158,8 @@ def markdown(rows: list[CaseResult]) -> str:
              "|---|---|---|---|---|---|---|"]
     for r in rows:
         first = "n/a" if r.ranked_first is None else ("yes" if r.ranked_first else "**no**")
-        verdict = (" \"no missing effect\"" if not r.missing_effect_found else "") + (" unexplained" if r.unexplained else "")
+        verdict = f" {r.verdict_code}" if r.verdict_code else ((" \"no missing effect\"" if not r.missing_effect_found else "")
+                                                                + (" unexplained" if r.unexplained else ""))
         before = r.heldout_before_rad if r.effect != "none" else r.baseline_heldout_rmse_rad
         lines.append(f"| {r.effect} | {r.seed} | {first}{verdict} ({', '.join(r.ranked)}) | {mrad(before)} | "
                      f"{mrad(r.heldout_after_rad)} | {mrad(r.floor_rad)} ({mrad(None if r.floor_rad is None else FLOOR_FACTOR * r.floor_rad)}) | "

@@ -2,7 +2,7 @@
 
 A :class:`Trajectory` is one continuous recording: timestamps ``t`` (T,) [s], measured joint
 positions ``q`` (T, 7) [rad], commanded joint targets ``q_cmd`` (T, 7) [rad] held from ``t[i]``
-until ``t[i+1]``, optional measured velocities ``qd`` (T, 7) [rad/s] and torques ``tau`` (T, 7)
+until ``t[i+1]`` (absent in a torque log from another controller: torque space only), optional measured velocities ``qd`` (T, 7) [rad/s] and torques ``tau`` (T, 7)
 [N·m]. File formats live in ``data_io.py``.
 """
 
@@ -25,12 +25,54 @@ class DataError(InputError):
     """The data cannot be used; the message says what is wrong and how to fix it."""
 
 
+class DataWarning(UserWarning):
+    """The data can be used but something in it will bias the result; the message says what."""
+
+
+DROID_CONTROL_HZ = 15.0
+GRID_DRIFT_WARN_S = 0.005  # accumulated logger/command drift that visibly shifts a 15 Hz replay
+
+
+def command_grid_drift(t: np.ndarray, control_hz: float | None) -> str | None:
+    """A sentence when the log's samples drift off the command grid, else None.
+
+    The replay holds ``q_cmd[i]`` from ``t[i]`` to ``t[i+1]``, i.e. it assumes a command switch at
+    every n-th logged sample. A logger whose period is close to, but not exactly, n command
+    periods (a 67 ms logger under 15 Hz = 66.7 ms commands) shifts every switch a little more
+    than the last: after 10 s the replayed commands are 50 ms late or early, which the workbench
+    would otherwise "diagnose" as latency. Without ``control_hz`` a log within 5 % of 15 Hz is
+    checked against DROID's 15 Hz."""
+    if len(t) < 2:
+        return None
+    period = float(t[-1] - t[0]) / (len(t) - 1)  # the mean: drift is what accumulates
+    assumed = control_hz is None
+    if assumed:
+        if abs(1.0 / period - DROID_CONTROL_HZ) > 0.05 * DROID_CONTROL_HZ:
+            return None
+        control_hz = DROID_CONTROL_HZ
+    cmd = 1.0 / control_hz
+    n = max(1, int(round(cmd / period)))
+    if abs(cmd / period - n) > 0.25:  # not a whole number of samples per command: no grid to drift from
+        return None
+    per_cmd = n * period - cmd
+    total = abs(per_cmd) * float(t[-1] - t[0]) / cmd
+    if total < GRID_DRIFT_WARN_S:
+        return None
+    where = "assumed DROID " if assumed else ""
+    return (f"logged every {1e3 * period:.2f} ms under {where}{control_hz:g} Hz commands ({1e3 * cmd:.2f} ms): the samples "
+            f"drift {1e3 * per_cmd:+.3f} ms per command off the command grid, {1e3 * total:.0f} ms over the "
+            f"{t[-1] - t[0]:.1f} s log; the replay holds q_cmd[i] from t[i] to t[i+1], so its commands are "
+            "mistimed by up to that much (looks like latency). Log at the command times (or a whole multiple "
+            "of the command rate), or resample q_cmd onto the true command times"
+            + ("" if not assumed else "; set control_hz in the file if the commands are not 15 Hz"))
+
+
 @dataclass
 class Trajectory:
     name: str
     t: np.ndarray
     q: np.ndarray
-    q_cmd: np.ndarray
+    q_cmd: np.ndarray | None  # None: a torque log (``tau``) from any controller, torque space only
     qd: np.ndarray | None = None
     tau: np.ndarray | None = None
     gripper: np.ndarray | None = None
@@ -110,18 +152,23 @@ def validate(traj: Trajectory, q_limits: np.ndarray, where: str | None = None) -
         if 1.0 / med < 0.95 * control_hz:
             raise DataError(f"{where}: logged at {1 / med:.3g} Hz, below its control rate control_hz = {control_hz:g} Hz; "
                             "log at least once per command")
+    drift = command_grid_drift(t, control_hz) if traj.q_cmd is not None else None
+    if drift:
+        import warnings
+
+        warnings.warn(f"{where}: {drift}", DataWarning, stacklevel=2)
     q = _check_array("q", where, traj.q, (7,), n)
-    q_cmd = _check_array("q_cmd", where, traj.q_cmd, (7,), n)
+    q_cmd = None if traj.q_cmd is None else _check_array("q_cmd", where, traj.q_cmd, (7,), n)
     qd = None if traj.qd is None else _check_array("qd", where, traj.qd, (7,), n)
     tau = None if traj.tau is None else _check_array("tau", where, traj.tau, (7,), n)
     gripper = None if traj.gripper is None else _check_array("gripper", where, traj.gripper, (), n)
     gripper_cmd = None if traj.gripper_cmd is None else _check_array("gripper_cmd", where, traj.gripper_cmd, (), n)
     for name, a in (("q", q), ("q_cmd", q_cmd)):
-        if np.abs(a).max() > 2 * np.pi:
+        if a is not None and np.abs(a).max() > 2 * np.pi:
             raise DataError(f"{where}: `{name}` reaches {np.abs(a).max():.1f}; joint angles must be in radians (these look like degrees: multiply by pi/180)")
     lo, hi = q_limits[:, 0], q_limits[:, 1]
     tol = 1e-3
-    out = (q_cmd < lo - tol) | (q_cmd > hi + tol)
+    out = np.zeros(1, bool) if q_cmd is None else (q_cmd < lo - tol) | (q_cmd > hi + tol)
     if out.any():
         i, j = (int(v) for v in np.argwhere(out)[0])
         raise DataError(

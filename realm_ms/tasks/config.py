@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from realm_ms.agents.droid_controller import DroidControlConfig, ImpedanceGains, JointPhysics
+from realm_ms.agents.control import DroidControlConfig, ImpedanceGains, JointPhysics
 from realm_ms.rendering import CameraSettings
 from realm_ms.tasks.progression import Thresholds
 
@@ -46,6 +46,10 @@ class RealmEnvConfig:
     # order), and a reused scene can drift ~1e-2 rad from a fresh one after a contact-rich
     # episode. Costs one scene build per reset (bench/reset_cost.py); False teleports objects.
     isolate_episodes: bool = True
+    # DROID's action spaces (realm_ms.agents.droid_action_spaces), converted to the joint target of
+    # droid_joint_pos; None gripper space = DROID's default (velocity for the velocity spaces)
+    action_space: str = "joint_position"
+    gripper_action_space: str | None = None
     obs_mode: str = "state"
     control_mode: str = "droid_joint_pos"
     num_envs: int = 1
@@ -58,6 +62,9 @@ class RealmEnvConfig:
         _check_int("num_envs", self.num_envs, minimum=1)
         if self.horizon is not None:
             _check_int("horizon (max_episode_steps)", self.horizon, minimum=1)
+        from realm_ms.agents.droid_action_spaces import check_action_space
+
+        check_action_space(self.action_space, self.gripper_action_space)
         if isinstance(self.perturbation, list):
             object.__setattr__(self, "perturbation", tuple(self.perturbation))
         if isinstance(self.robot_model, Path):
@@ -79,6 +86,7 @@ class RealmEnvConfig:
             top["control"] = DroidControlConfig(**_control_fields(top["control"]))
         if cams:
             top["cameras"] = dataclasses.replace(cfg.cameras, **cams)
+        _check_maniskill_kwargs(rest)
         return dataclasses.replace(cfg, **top), rest
 
     # ------------------------------------------------------------------ serialisation
@@ -132,6 +140,8 @@ KWARG_FIELDS: dict[str, tuple[str, str]] = {
     "success_tail": ("top", "success_tail"),
     "thresholds": ("top", "thresholds"),
     "isolate_episodes": ("top", "isolate_episodes"),
+    "action_space": ("top", "action_space"),
+    "gripper_action_space": ("top", "gripper_action_space"),
 }
 
 
@@ -143,6 +153,27 @@ def make_env(config: RealmEnvConfig, **overrides):
 
     realm_ms.register_envs()
     return gym.make(config.task, **(config.gym_kwargs() | overrides))
+
+
+def _check_maniskill_kwargs(rest: dict) -> None:
+    """The keywords left for ManiSkill must be ones it takes: an unknown one is an error listing the
+    known keywords (not ``BaseEnv.__init__() got an unexpected keyword argument``), and
+    ``num_envs`` is a whole number >= 1 (0 fails deep inside ManiSkill with an IndexError)."""
+    import difflib
+    import inspect
+
+    from mani_skill.envs.sapien_env import BaseEnv
+
+    maniskill = [n for n in inspect.signature(BaseEnv.__init__).parameters if n != "self"]
+    unknown = sorted(k for k in rest if k not in maniskill)
+    if unknown:
+        known = sorted(KWARG_FIELDS) + ["config"]
+        near = difflib.get_close_matches(unknown[0], known + maniskill, n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise ValueError(f"unknown gym.make keyword(s) {', '.join(map(repr, unknown))}{hint}; REALM keywords: "
+                         f"{', '.join(known)}; ManiSkill keywords: {', '.join(maniskill)}")
+    if "num_envs" in rest:
+        _check_int("num_envs", rest["num_envs"], minimum=1)
 
 
 def _check_int(name: str, v: Any, minimum: int) -> None:

@@ -27,48 +27,18 @@ from mani_skill.utils import sapien_utils
 from mani_skill.utils.structs.pose import Pose
 from mani_skill.utils.structs.types import GPUMemoryConfig, SceneConfig, SimConfig
 
-from realm_ms.agents.droid_controller import DroidControlConfig
+from realm_ms.agents.control import DroidControlConfig
 from realm_ms.agents.panda_droid import PandaDroid
+from realm_ms.known_warnings import install as _silence_known_warnings
 from realm_ms.rendering import camera_shader_config, vertical_fov
+from realm_ms.tasks.perturbation_set import PerturbationSet
 from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
 from realm_ms.tasks.scenes import get_scene
 from realm_ms.tasks.config import RealmEnvConfig, _control_fields
 from realm_ms.tasks.task_spec import TASKS, CameraSpec, TaskSpec
 
-def resolve_perturbations(spec):
-    """The env's perturbation set; ``realm_ms.perturbations`` installs the resolver (tasks sit below it)."""
-    if PERTURBATION_RESOLVER is None:
-        if spec in (None, 0, "Default", "default"):
-            return _NoPerturbation()
-        raise ValueError("perturbations need `import realm_ms.perturbations` (done by `import realm_ms`)")
-    return PERTURBATION_RESOLVER(spec)
-
-
-class _NoPerturbation:
-    """Stand-in when realm_ms.perturbations is not imported: Default, no hooks."""
-
-    needs_reconfigure = False
-    specs: list = []
-    override = None
-
-    def draw(self, env, env_idx, scene_changing_only=False):
-        self.specs = [env.task_spec] * env.num_envs
-
-    def camera_pose(self, uid, pose):
-        return pose
-
-    def on_episode_init(self, env, env_idx):
-        pass
-
-    def on_observation(self, env, data):
-        return data
-
-    def record(self):
-        return dict(name="Default", names=["Default"], ids=[0], params=[{} for _ in self.specs])
-
-
-PERTURBATION_RESOLVER = None  # set by realm_ms.perturbations: spec -> PerturbationSet
+_silence_known_warnings()
 
 
 class RealmEnv(BaseEnv):
@@ -105,23 +75,28 @@ class RealmEnv(BaseEnv):
         self.instruction = self.task_spec.instruction
         # --- perturbations: resolved here, drawn every reset (hooks below; logic in realm_ms.perturbations)
         self.perturbation_spec = config.perturbation
-        self.perturbations = resolve_perturbations(config.perturbation)
+        self.perturbations = PerturbationSet.resolve(config.perturbation)
         self.active_spec = self.task_spec  # the task as perturbed in sub-env 0 (instruction, skill, objects)
         self._pert_fresh = False
         # ---
         self._action_warned: set[str] = set()
+        self.droid_actions = None  # converter of a non-default DROID action space (_install_action_space)
         self._contacts_dirty = False  # simulated since the last (re)build: see _forget_contacts
         # Cameras capture on every step unless a caller that reads images only now and then (a policy
         # executing an action chunk open-loop) turns this off for the steps in between: those steps
         # then return the last captured images. Rendering dominates a step with cameras.
         self.capture_sensors = True
         self._last_sensor_data: dict | None = None
+        # ManiSkill asks for a CUDA renderer by default and warns on every env where there is none
+        # (rendering works on the CPU through Vulkan, lavapipe included): ask for what is there
+        kwargs.setdefault("render_backend", "gpu" if torch.cuda.is_available() else "cpu")
         super().__init__(*args, robot_uids=robot_uids, **kwargs)
         # the full description, ManiSkill's part included: records store it, make_env re-creates the env
         self.config = dataclasses.replace(
             config, task=self.task_spec.env_id, obs_mode=self.obs_mode, control_mode=self.control_mode,
             num_envs=self.num_envs, sim_backend=self.backend.sim_backend, render_mode=self.render_mode,
         )
+        self._install_action_space()
 
     # kept for code that reads them: the camera settings live in ``self.cameras``
     @property
@@ -343,7 +318,7 @@ class RealmEnv(BaseEnv):
         options = dict(options or {})
         if "perturbation" in options:
             self.perturbation_spec = options["perturbation"]
-            self.perturbations = resolve_perturbations(options["perturbation"])
+            self.perturbations = PerturbationSet.resolve(options["perturbation"])
             options["reconfigure"] = True  # back to (or away from) the pristine scene
         self.perturbations.override = options.get("perturbation_params")
         if self.perturbations.needs_reconfigure:
@@ -392,6 +367,8 @@ class RealmEnv(BaseEnv):
                              f"({self.num_envs}, {space.shape[0]}) for control mode {self.control_mode!r}")
         if not torch.isfinite(a).all():
             raise ValueError(f"action contains NaN or Inf: {a.tolist()}")
+        if self.droid_actions is not None:  # DROID's rescaling/IK replaces the per-dim clip below
+            return self.droid_actions(self.agent, a)
         lo = torch.as_tensor(space.low, device=a.device)
         hi = torch.as_tensor(space.high, device=a.device)
         outside = (a < lo) | (a > hi)
@@ -405,6 +382,21 @@ class RealmEnv(BaseEnv):
                               RuntimeWarning, stacklevel=3)
             a = torch.maximum(torch.minimum(a, hi), lo)
         return a
+
+    def _install_action_space(self) -> None:
+        """A DROID action space other than joint_position: its gym space, and the converter
+        ``_checked_action`` applies (``realm_ms.agents.droid_action_spaces``)."""
+        from realm_ms.agents.droid_action_spaces import EnvActionConverter, make_action_space
+
+        self.droid_action_space = space = make_action_space(self.config.action_space, self.config.gripper_action_space)
+        self.droid_actions = None
+        if space.action_space == "joint_position" and space.gripper == "position":
+            return  # droid_joint_pos itself: ManiSkill's space, untouched
+        from gymnasium.vector.utils import batch_space
+
+        self.droid_actions = EnvActionConverter(space)
+        self.single_action_space = space.gym_space()
+        self.action_space = batch_space(self.single_action_space, self.num_envs) if self.num_envs > 1 else self.single_action_space
 
     def stalled_stage(self) -> list[str]:
         return self.tracker.stalled_stage()
@@ -431,6 +423,7 @@ def register_task(spec: TaskSpec, base: type[RealmEnv] = RealmEnv) -> type[Realm
     from the task's own module: the class reports that module."""
     from mani_skill.utils.registration import register_env
 
+    from realm_ms.registration import unregister_placeholder
     from realm_ms.tasks.progression import RUBRICS
 
     TASKS.register(spec.env_id, spec)
@@ -445,5 +438,6 @@ def register_task(spec: TaskSpec, base: type[RealmEnv] = RealmEnv) -> type[Realm
     )
     module = sys._getframe(1).f_globals.get("__name__", base.__module__)
     cls = type(name, (base,), {"task_spec": spec, "__doc__": doc, "__module__": module})
+    unregister_placeholder(spec.env_id, spec.horizon)
     register_env(spec.env_id, max_episode_steps=spec.horizon)(cls)
     return cls

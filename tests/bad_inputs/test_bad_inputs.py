@@ -1,5 +1,6 @@
-"""Run the bad-input corpus (``bad_input_cases.py``): a clear one-line error with exit code 2, or
-accepted with its documented meaning; never a traceback, never a hang (every case has a timeout)."""
+"""Run the bad-input corpus (``bad_input_cases.py`` and ``bad_input_cases_runs.py``): a clear one-line
+error with exit code 2, or accepted with its documented meaning; never a traceback, never a hang
+(every case has a timeout)."""
 
 from __future__ import annotations
 
@@ -14,8 +15,11 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from bad_input_cases import CASES, Case  # noqa: E402
+from bad_input_cases import CASES as BASE_CASES, Case  # noqa: E402
+from bad_input_cases_runs import CASES as RUN_CASES, make_files  # noqa: E402
 from bad_input_files import make_all  # noqa: E402
+
+CASES = BASE_CASES + RUN_CASES
 
 REPO = Path(__file__).resolve().parents[2]
 REALM = Path(sys.executable).parent / "realm"
@@ -25,6 +29,7 @@ REALM = Path(sys.executable).parent / "realm"
 def root(tmp_path_factory) -> Path:
     r = tmp_path_factory.mktemp("bad_inputs")
     make_all(r)
+    make_files(r)  # runs one tiny `realm eval` (the run directory the resume cases change)
     return r
 
 
@@ -52,7 +57,7 @@ def _params():
 
 
 def test_corpus_size_and_shape():
-    assert len(CASES) >= 60
+    assert len(CASES) >= 250
     ids = [c.id for c in CASES]
     assert len(ids) == len(set(ids)), "duplicate case ids"
     for c in CASES:

@@ -1,5 +1,10 @@
 """Encoder bias: the sensor the controller servos on reads the logged joint angle plus a constant
-offset, so the arm settles ``bias`` away from where the log says it was commanded."""
+offset, so the arm settles ``bias`` away from where the log says it was commanded.
+
+Sign convention: ``q_servo = q_logged + bias``. The law drives ``q_servo`` to the command, so at rest
+``q_logged = q_cmd - bias``: a positive bias makes the log sit *below* the command, and the residual
+(measured - nominal simulation) reads about ``-bias``. A fitted ``bias`` is what to subtract from
+the controller's sensor (or add to the logged angle) to make the two agree."""
 
 from __future__ import annotations
 
@@ -15,7 +20,7 @@ class EncoderBias(Effect):
 
     @classmethod
     def param_specs(cls, config):
-        return [ParamSpec("bias", "rad", 0.003, -0.02, 0.02, 0.0, doc="servo-sensor offset (logged = servo - bias)")]
+        return [ParamSpec("bias", "rad", 0.003, -0.02, 0.02, 0.0, doc="servo-sensor offset: q_servo = q_logged + bias, so at rest q_logged = q_cmd - bias")]
 
     def measure(self, q, qd, state):
         return q + self.p("bias", q), qd

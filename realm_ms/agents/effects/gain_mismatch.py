@@ -24,9 +24,9 @@ class GainMismatch(Effect):
     def gains(self, gains):
         ks = 1.0 + self.p("stiffness_error", gains.kq)
         kd = 1.0 + self.p("damping_error", gains.kq)
-        from realm_ms.agents.droid_controller import TorchGains
+        from realm_ms.agents.control import BatchedGains
 
-        return TorchGains(gains.kq * ks, gains.kqd * kd, gains.kx * ks, gains.kxd * kd)
+        return BatchedGains(gains.kq * ks, gains.kqd * kd, gains.kx * ks, gains.kxd * kd)
 
     def evidence(self, values, features):
         return features.sentence_for(self, values)

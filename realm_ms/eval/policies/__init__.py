@@ -37,3 +37,18 @@ def make_policy(spec: str, **options) -> Policy:
 def policy_names() -> list[str]:
     _register_builtins()
     return POLICIES.names()
+
+
+def policy_action_space(policy: Policy, options: dict | None = None) -> dict:
+    """Env keywords of the DROID action space ``policy`` acts in: its own declaration
+    (``env_action_space()``, e.g. an openpi server's metadata), else ``options["action_space"]``
+    (``SPACE[:GRIPPER]``, ``realm eval --action-space``); ``{}`` = joint_position."""
+    from realm_ms.agents.droid_action_spaces import parse_action_space_flag
+    from realm_ms.errors import UserError
+
+    try:
+        if hasattr(policy, "env_action_space"):
+            return policy.env_action_space()
+        return parse_action_space_flag((options or {}).get("action_space"))
+    except ValueError as e:
+        raise UserError(f"--action-space: {e}") from None

@@ -1,6 +1,10 @@
 """A minimal openpi-protocol websocket server (in-process, threaded): for tests and for serving any
 callable ``infer(obs: dict) -> dict`` to openpi clients (same handshake and framing as openpi's
-``WebsocketPolicyServer``: metadata first, one binary reply per request, errors as a text frame)."""
+``WebsocketPolicyServer``: metadata first, one binary reply per request, errors as a text frame).
+
+``serial=True`` answers one request at a time over all connections, as openpi's server does (its
+asyncio handler calls the model synchronously): the stand-in for one GPU server in the throughput
+bench."""
 
 from __future__ import annotations
 
@@ -12,9 +16,11 @@ from realm_ms.eval.policies.openpi_wire import packb, unpackb
 
 
 class OpenPIServer:
-    def __init__(self, infer: Callable[[dict], dict], host: str = "127.0.0.1", port: int = 0, metadata: dict | None = None):
+    def __init__(self, infer: Callable[[dict], dict], host: str = "127.0.0.1", port: int = 0, metadata: dict | None = None,
+                 serial: bool = False):
         self.infer, self.host, self.port, self.metadata = infer, host, port, metadata or {}
         self.requests = 0
+        self._lock = threading.Lock() if serial else None
         self._server = None
         self._thread = None
 
@@ -26,7 +32,11 @@ class OpenPIServer:
             except Exception:
                 return  # client went away
             try:
-                reply = self.infer(unpackb(msg))
+                if self._lock is not None:
+                    with self._lock:
+                        reply = self.infer(unpackb(msg))
+                else:
+                    reply = self.infer(unpackb(msg))
                 self.requests += 1
                 ws.send(packb(reply))
             except Exception:
@@ -67,3 +77,32 @@ def hold_infer(obs: dict, horizon: int = 10) -> dict:
     q = np.asarray(obs["observation/joint_position"], dtype=np.float64).reshape(7)
     a = np.concatenate([np.tile(q, (horizon, 1)), np.zeros((horizon, 1))], axis=1)
     return {"actions": a}
+
+
+def sleep_infer(obs: dict, seconds: float = 0.1, horizon: int = 10) -> dict:
+    """A pi0-format stand-in for a model: sleeps ``seconds`` (the inference time), answers
+    ``horizon`` zero joint velocities with the gripper held (throughput bench)."""
+    import time
+
+    import numpy as np
+
+    time.sleep(seconds)
+    g = float(np.asarray(obs["observation/gripper_position"]).reshape(-1)[0])
+    return {"actions": np.concatenate([np.zeros((horizon, 7)), np.full((horizon, 1), g)], axis=1)}
+
+
+class ReplayInfer:
+    """Serves a recorded action sequence in chunks of ``chunk``, one chunk per request, in order
+    (tests: a server answering an expert's recorded velocities)."""
+
+    def __init__(self, actions, chunk: int = 8):
+        import numpy as np
+
+        self.actions, self.chunk, self.k = np.asarray(actions, dtype=np.float64), chunk, 0
+
+    def __call__(self, obs: dict) -> dict:
+        a = self.actions[self.k: self.k + self.chunk]
+        if len(a) == 0:
+            a = self.actions[-1:]
+        self.k += self.chunk
+        return {"actions": a}

@@ -16,13 +16,14 @@ import numpy as np
 from realm_ms.sysid.optimize import Group, evaluate_groups
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.report.html import page
+from realm_ms.sysid.report.auto_sections import auto_waterfall, friction_curves
 from realm_ms.sysid.report.sections import SECTIONS, ReportData, Replay
 
 
 def _context(ss: SegmentSet, arm_model, gains: str) -> dict:
     import torch
 
-    from realm_ms.agents.droid_controller import GAIN_PRESETS, TorchGains
+    from realm_ms.agents.control import GAIN_PRESETS, BatchedGains
 
     vel, acc, err = [], [], []
     rev = []
@@ -45,7 +46,7 @@ def _context(ss: SegmentSet, arm_model, gains: str) -> dict:
     q = torch.as_tensor(ss.meas[ss.mask], dtype=torch.float32)
     with torch.inference_mode():
         grav = arm_model.gravity_torque(q).numpy()
-        g = TorchGains.from_gains(GAIN_PRESETS[gains] if isinstance(gains, str) else gains, len(q), "cpu")
+        g = BatchedGains.from_gains(GAIN_PRESETS[gains] if isinstance(gains, str) else gains, len(q), "cpu")
         jac = arm_model.jacobian(q)
         kp = torch.diag_embed(g.kq) + jac.transpose(1, 2) @ (g.kx[..., None] * jac)
         tau = (kp @ torch.as_tensor(err, dtype=torch.float32)[..., None])[..., 0]
@@ -57,7 +58,7 @@ def _context(ss: SegmentSet, arm_model, gains: str) -> dict:
 
 
 def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fit_result=None, waterfall=True,
-                 data_name: str = "", log=print) -> Path:
+                 data_name: str = "", log=print, auto=None) -> Path:
     from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose
     from realm_ms.sysid.signatures import noise_floor
 
@@ -79,7 +80,8 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
     rep = lambda label, ss, r: Replay(label, ss, r[2][0])  # noqa: E731
     name = "model" if model.effects else "nominal"
     d = ReportData(name, data_name, rep("nominal", tr_ss, r_tr[0]), rep("nominal", he_ss, r_he[0]),
-                   rep(name, tr_ss, r_tr[1]), rep(name, he_ss, r_he[1]), {}, 0.0, model=model, fit=fit_result)
+                   rep(name, tr_ss, r_tr[1]), rep(name, he_ss, r_he[1]), {}, 0.0, model=model, fit=fit_result,
+                   auto=auto)
     floors = [noise_floor(he_ss, x.residual)[0] for x in (d.nominal_held, d.model_held)]
     d.noise_floor = float(min(floors))
     d.context = _context(he_ss, evaluator.sim.model if evaluator.device == "cpu" else _arm(), model.gains)
@@ -97,7 +99,7 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
         diagnosis = diagnose(train, heldout, model, evaluator=evaluator, log=log).to_json()
     d.diagnosis = diagnosis
     sections = []
-    for fn in SECTIONS:
+    for fn in SECTIONS[:4] + [auto_waterfall, friction_curves] + SECTIONS[4:]:
         try:
             sections.append(fn(d))
         except Exception as e:  # noqa: BLE001 - one failing plot must not lose the whole report

@@ -50,6 +50,7 @@ class ReportData:
     waterfall: list[tuple[str, float]] = field(default_factory=list)
     leave_one_out: list[tuple[str, float]] = field(default_factory=list)  # full model minus one effect
     model: object = None
+    auto: dict | None = None  # `realm sysid auto --json` output
 
 
 def _fmt(v: float) -> str:

@@ -19,7 +19,19 @@ from realm_ms.tasks.scenes import household  # noqa: F401  (kitchen, dining_room
 
 
 def get_scene(name: str) -> TabletopScene:
-    """The registered scene ``name``, with ``?key=value&...`` options applied."""
+    """The registered scene ``name``, with ``?key=value&...`` options applied. A key given twice,
+    or a malformed query, is an error (never the last one silently)."""
     base, _, query = str(name).partition("?")
     scene = SCENES.get(base)
-    return scene.with_options(**dict(parse_qsl(query, strict_parsing=True))) if query else scene
+    if not query:
+        return scene
+    try:
+        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=True)
+    except ValueError:
+        raise ValueError(f"scene {name!r}: malformed options {query!r}; write NAME?key=value&key=value") from None
+    options: dict[str, str] = {}
+    for key, value in pairs:
+        if key in options:
+            raise ValueError(f"scene {name!r}: option {key!r} is given twice ({options[key]!r}, {value!r}); give it once")
+        options[key] = value
+    return scene.with_options(**options)

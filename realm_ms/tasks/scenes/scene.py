@@ -53,6 +53,39 @@ def episode_stream(env, i: int, name: str) -> np.random.Generator:
     return np.random.default_rng([int(env._episode_seed[i]), zlib.crc32(name.encode())])
 
 
+def _option_value(key: str, raw: str, cur):
+    """A scene option's text (from ``NAME?key=value``) as the type of its current value ``cur``:
+    numbers must be finite, a tuple of numbers is given comma-separated with as many entries."""
+    import math
+
+    def number(text: str, kind: type):
+        try:
+            v = kind(text)
+        except ValueError:
+            raise ValueError(f"scene option {key}={raw!r}: expected {'an integer' if kind is int else 'a number'}") from None
+        if not math.isfinite(v):
+            raise ValueError(f"scene option {key}={raw!r}: expected a finite number")
+        return v
+
+    if isinstance(cur, bool):
+        if raw.lower() not in ("true", "false", "1", "0"):
+            raise ValueError(f"scene option {key}={raw!r}: expected true or false")
+        return raw.lower() in ("true", "1")
+    if isinstance(cur, (int, float)):
+        return number(raw, type(cur))
+    if isinstance(cur, str):
+        return raw
+    if isinstance(cur, tuple) and cur and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in cur):
+        parts = [t.strip() for t in raw.split(",")]
+        if len(parts) != len(cur):
+            raise ValueError(f"scene option {key}={raw!r}: expected {len(cur)} comma-separated numbers (now {','.join(map(str, cur))})")
+        vals = tuple(number(t, float) for t in parts)
+        if key.endswith("half_size") and min(vals) <= 0:
+            raise ValueError(f"scene option {key}={raw!r}: half sizes must be > 0 m")
+        return vals
+    raise ValueError(f"scene option {key!r} cannot be set in a scene name; make the scene in Python (dataclasses.replace)")
+
+
 @dataclass(frozen=True)
 class TabletopScene:
     """Static surroundings of a task: floor, walls, table, furniture, lights.
@@ -103,11 +136,7 @@ class TabletopScene:
         for key, raw in options.items():
             if key not in fields:
                 raise ValueError(f"scene {self.name!r} has no option {key!r}; options: {', '.join(sorted(fields))}")
-            cur = getattr(self, key)
-            try:
-                changes[key] = type(cur)(raw) if isinstance(cur, (int, float, str)) else raw
-            except (TypeError, ValueError):
-                raise ValueError(f"scene option {key}={raw!r}: expected a {type(cur).__name__}") from None
+            changes[key] = _option_value(key, raw, getattr(self, key)) if isinstance(raw, str) else raw
         return dataclasses.replace(self, **changes)
 
     def build(self, env) -> None:

@@ -19,6 +19,11 @@ across resets. The hooks, in the order the env calls them on ``reset``:
     Camera images after rendering (V-AUG); ``params`` holds one dict per sub-env.
 ``camera_pose(uid, pose, params)``
     External camera extrinsics at reconfiguration (V-VIEW); ``pose`` is batched over sub-envs.
+
+The interface and its registry live in the tasks layer, which runs them; the perturbations
+themselves (``realm_ms.perturbations``, one module each) register into ``PERTURBATIONS`` when that
+package is imported, as ManiSkill's envs register on import. Making an env through gymnasium or
+``make_env`` imports it.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from realm_ms.registry import Registry
 from realm_ms.tasks.task_spec import TaskSpec
 
 
@@ -78,6 +84,16 @@ class Perturbation:
 
     def __repr__(self) -> str:
         return f"<perturbation {self.pid} {self.name}>"
+
+
+#: every perturbation class by name, with its numeric id as an alias (filled by realm_ms.perturbations)
+PERTURBATIONS: Registry[type[Perturbation]] = Registry("perturbation")
+
+
+def register_perturbation(cls: type[Perturbation]) -> type[Perturbation]:
+    """Class decorator: register ``cls`` under its ``name`` and its ``pid``."""
+    PERTURBATIONS.register(cls.name, cls, aliases=(str(cls.pid),))
+    return cls
 
 
 def as_float(x) -> float:

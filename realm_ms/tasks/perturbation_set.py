@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from realm_ms.perturbations.perturbation import DrawContext, Perturbation
+from realm_ms.tasks.perturbation import PERTURBATIONS, DrawContext, Perturbation
 from realm_ms.tasks.task_spec import TaskSpec
 
 PerturbationLike = str | int | Perturbation | Sequence
@@ -33,12 +33,10 @@ class PerturbationSet:
     @classmethod
     def resolve(cls, spec: PerturbationLike | None) -> "PerturbationSet":
         """``None``/``"Default"``/``0``, a name, an id, a ``Perturbation`` or a list of those."""
-        from realm_ms.perturbations import PERTURBATIONS
-
         if isinstance(spec, PerturbationSet):
             return cls(spec.items)
-        if spec is None:
-            return cls()
+        if spec is None or (isinstance(spec, (str, int)) and str(spec).lower() in ("default", "0")):
+            return cls()  # the empty composition
         if isinstance(spec, (str, int, Perturbation)) or not isinstance(spec, Sequence):
             spec = [spec]
         items: list[Perturbation] = []

@@ -1,0 +1,255 @@
+"""HTML pieces of the eval reports (``realm_ms.eval.report``): the page skeleton, tables, the
+protocol header every page starts with, episode labels and the inline video gallery.
+
+Everything is self-contained (CSS inline, figures as data URIs); videos stay files next to the run
+and are referenced relatively, so a report can be moved together with its run directory.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import os
+from pathlib import Path
+
+from realm_ms.eval.provenance import CONTROL_HZ, describe_action_space
+
+CSS = """
+body{font-family:system-ui,-apple-system,sans-serif;max-width:1240px;margin:1.5em auto;padding:0 1em;color:#222;line-height:1.35}
+h1{font-size:1.55em;margin-bottom:.2em} h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
+table{border-collapse:collapse;margin:.5em 0;font-size:.88em} td,th{border:1px solid #ddd;padding:3px 8px;text-align:right;vertical-align:top}
+th{background:#f3f3f3} td.l,th.l{text-align:left}
+.proto{display:grid;grid-template-columns:max-content 1fr;gap:2px 14px;font-size:.9em;background:#f7f7f9;border:1px solid #e2e2e8;
+ padding:.6em .9em;border-radius:6px;margin:.6em 0}
+.proto dt{color:#555} .proto dd{margin:0}
+.headline{font-size:1.05em;margin:.6em 0} .headline b{font-size:1.15em}
+.err{color:#a00;font-weight:600} .ok{color:#161} .warn{background:#fff3cd;border:1px solid #e6d28a;padding:.4em .7em;border-radius:4px}
+.note{color:#555;font-size:.9em}
+.figs{display:flex;flex-wrap:wrap;gap:10px 28px;align-items:flex-start}
+figure{margin:.6em 0;display:table} figure img{max-width:100%;border:1px solid #eee}
+figcaption{display:table-caption;caption-side:bottom;font-size:.86em;color:#444;padding-top:4px}
+.vids{display:grid;grid-template-columns:repeat(auto-fill,minmax(460px,1fr));gap:12px}
+.vid{border:1px solid #ddd;border-radius:6px;padding:6px;background:#fafafa;font-size:.85em}
+.vid video{width:100%;height:auto;background:#000;display:block}
+.tag{display:inline-block;padding:0 6px;border-radius:3px;font-weight:600}
+.tag.s{background:#d8f0d8;color:#145214} .tag.f{background:#f8dcdc;color:#7a1010} .tag.e{background:#eee;color:#555}
+.cmp td.v{font-variant-numeric:tabular-nums} .cmp th[colspan]{text-align:center}
+"""
+
+
+def esc(s) -> str:
+    return html.escape(str(s))
+
+
+def table(header: list[str], rows: list[list], left: int = 1, cls: str = "") -> str:
+    """Cells that start with ``<`` are inserted as HTML, everything else is escaped."""
+    def cell(v, i, tag):
+        align = ' class="l"' if i < left else ""
+        return f"<{tag}{align}>{v if isinstance(v, str) and v.startswith('<') else esc(v)}</{tag}>"
+
+    head = "<tr>" + "".join(cell(h, i, "th") for i, h in enumerate(header)) + "</tr>"
+    body = "".join("<tr>" + "".join(cell(v, i, "td") for i, v in enumerate(r)) + "</tr>" for r in rows)
+    return f'<table class="{cls}">{head}{body}</table>'
+
+
+def page(title: str, body: str) -> str:
+    return (f"<!doctype html><html><head><meta charset='utf-8'><title>{esc(title)}</title><style>{CSS}</style></head>"
+            f"<body>{body}</body></html>")
+
+
+def figure(png: bytes, caption: str, alt: str) -> str:
+    return (f'<figure><img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="{esc(alt)}">'
+            f"<figcaption>{caption}</figcaption></figure>")
+
+
+def short(task: str) -> str:
+    return task.removeprefix("REALM-").removesuffix("-v1")
+
+
+# ------------------------------------------------------------------------------------ protocol
+def _values(records: list[dict], *keys: str) -> list:
+    """Distinct values of the first of ``keys`` each record has (``fingerprint.KEY`` looks inside
+    the record's run fingerprint)."""
+    seen = []
+    for r in records:
+        for key in keys:
+            head, _, sub = key.partition(".")
+            v = (r.get(head) or {}).get(sub) if sub else r.get(head)
+            if v is not None:
+                if v not in seen:
+                    seen.append(v)
+                break
+    return seen
+
+
+def _meta(meta: dict, *keys: str) -> list:
+    return next(([meta[k]] for k in keys if meta.get(k) is not None), [])
+
+
+def _mixed(vals: list[str]) -> str:
+    if not vals:
+        return "not recorded"
+    return vals[0] if len(vals) == 1 else " / ".join(vals) + " (mixed: records from runs with different settings)"
+
+
+def run_protocol(run_dir: Path, records: list[dict]) -> dict[str, str]:
+    """The protocol a run was made under, label -> text, from ``RUN/run.json`` and its records
+    (records win where they hold the value: they are what actually ran)."""
+    meta = {}
+    meta_path = Path(run_dir) / "run.json"
+    if meta_path.exists():
+        try:
+            meta = json.loads(meta_path.read_text())
+        except json.JSONDecodeError:
+            meta = {}
+    tasks = meta.get("tasks") or sorted({r["task"] for r in records})
+    perts = meta.get("perturbations") or sorted({r["perturbation"] for r in records})
+    seeds = sorted({int(r["seed"]) for r in records})
+    episodes = meta.get("episodes") or (len(seeds) or None)
+    seed = meta.get("seed", seeds[0] if seeds else None)
+    steps = _values(records, "max_steps") or _meta(meta, "max_steps")
+    replan = _values(records, "replan_every") or _meta(meta, "replan_every")
+    cams = [f"{c[0]}x{c[1]}" if isinstance(c, list) else str(c)
+            for c in _values(records, "fingerprint.camera_size", "camera") or _meta(meta, "camera_size")]
+    spaces = _values(records, "action_space", "fingerprint.action_space", "control_mode") or _meta(meta, "action_space", "control_mode")
+    versions = _values(records, "code_version", "fingerprint.code_version") or _meta(meta, "code_version")
+    policies = _values(records, "policy") or _meta(meta, "policy")
+    horizon = [f"{s} control steps ({s / CONTROL_HZ:.0f} s at {CONTROL_HZ} Hz)" for s in steps]
+    tail = meta.get("success_tail")
+    seeds_text = "not recorded"
+    if seed is not None and episodes:
+        seeds_text = f"{seed} .. {seed + episodes - 1} (episode i: seed + i, the same under every perturbation)"
+    return {
+        "policy": _mixed(policies),
+        "protocol": f"the {meta.get('protocol', '?')} preset with the command's flags applied" if meta else "not recorded (no run.json)",
+        "tasks": f"{plural(len(tasks), 'task')}: " + ", ".join(short(t) for t in tasks),
+        "perturbations": f"{plural(len(perts), 'perturbation')}: " + ", ".join(perts),
+        "episodes": f"{episodes} per (task, perturbation) cell" if episodes else "not recorded",
+        "seeds": seeds_text,
+        "horizon": _mixed(horizon) + (f"; ends {tail} steps after success" if tail else ""),
+        "action space": _mixed([describe_action_space(m) for m in spaces])
+        + (f"; re-planned every {replan[0]} steps" if len(replan) == 1 else ""),
+        "camera": _mixed(cams) + (" per camera (the policy's frames and the videos)" if cams else ""),
+        "code version": _mixed(versions),
+    }
+
+
+def protocol_block(proto: dict[str, str], n_ok: int, n_err: int, n_unsup: int, run_dir: Path | None = None) -> str:
+    rows = "".join(f"<dt>{esc(k)}</dt><dd>{esc(v)}</dd>" for k, v in proto.items())
+    rows += f"<dt>records</dt><dd>{records_summary(n_ok, n_err, n_unsup)}</dd>"
+    if run_dir is not None:
+        rows += f"<dt>run directory</dt><dd><code>{esc(run_dir)}</code></dd>"
+    return f'<dl class="proto">{rows}</dl>'
+
+
+def plural(n: int, word: str) -> str:
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+def records_summary(n_ok: int, n_err: int, n_unsup: int) -> str:
+    """'4 finished episodes, 1 error record, 0 unsupported' (HTML; errors in red)."""
+    err = f'<span class="err">{plural(n_err, "error record")}</span>' if n_err else '<span class="ok">0 error records</span>'
+    return f"<span>{plural(n_ok, 'finished episode')}, {err}, {n_unsup} unsupported</span>"
+
+
+def error_banner(n_err: int) -> str:
+    if not n_err:
+        return ""
+    return (f'<p class="warn"><span class="err">{plural(n_err, "episode")} ended in an error record</span> and are not counted in the '
+            f'numbers below; they are listed under <a href="#errors">Errors</a> and run again when the same '
+            f"<code>realm eval</code> command is repeated.</p>")
+
+
+# ------------------------------------------------------------------------------------ episodes
+def episode_label(rec: dict) -> tuple[str, str]:
+    """(text, css class): "succeeded", "stalled at GRASP", "error", ... never "stalled at DONE"."""
+    status = rec.get("status", "ok")
+    if status == "error":
+        return "error", "e"
+    if status == "unsupported":
+        return "unsupported", "e"
+    if rec.get("success"):
+        return "succeeded", "s"
+    stage = rec.get("stalled_stage")
+    if stage == "DONE":  # every stage met at some point but success was not held to the end
+        return "all stages reached, success not held", "f"
+    return (f"stalled at {stage}" if stage else "failed"), "f"
+
+
+def select_videos(records: list[dict], which: str, per_cell: int) -> tuple[list[dict], int, int]:
+    """The episodes to show: per (task, perturbation) cell, the first ``per_cell`` by seed among the
+    failed ones (``which="failures"``) or all (``"all"``) that have a video. Returns (chosen, how
+    many more had a video, how many failed episodes had none)."""
+    if which == "none":
+        return [], 0, 0
+    chosen, more, missing = [], 0, 0
+    cells: dict[tuple[str, str], list[dict]] = {}
+    for r in sorted(records, key=lambda r: (r["task"], r["perturbation"], int(r["seed"]))):
+        if r.get("status", "ok") != "ok" or (which == "failures" and r.get("success")):
+            continue
+        if not r.get("video"):
+            missing += int(not r.get("success"))
+            continue
+        cells.setdefault((r["task"], r["perturbation"]), []).append(r)
+    for eps in cells.values():
+        chosen += eps[:per_cell]
+        more += max(0, len(eps) - per_cell)
+    return chosen, more, missing
+
+
+def video_path(rec: dict, run_dir: Path) -> Path:
+    """The record's video; looked up in ``RUN/videos/`` when the stored path (relative to the
+    directory ``realm eval`` ran in) does not resolve from here."""
+    p = Path(rec["video"])
+    return p if p.exists() else Path(run_dir) / "videos" / p.name
+
+
+def _poster(path: Path) -> str:
+    """The video's last frame (where the episode ended) as a PNG data URI, '' if unreadable."""
+    try:
+        import imageio.v2 as imageio
+
+        reader = imageio.get_reader(path)
+        frame = None
+        for frame in reader:
+            pass
+        reader.close()
+        if frame is None:
+            return ""
+        buf = io.BytesIO()
+        imageio.imwrite(buf, frame, format="png")
+        return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
+    except Exception:  # a missing or broken file: the player shows its own error, the page still renders
+        return ""
+
+
+def video_gallery(records: list[dict], run_dir: Path, out_dir: Path, which: str, per_cell: int) -> str:
+    chosen, more, missing = select_videos(records, which, per_cell)
+    kind = "failed episodes" if which == "failures" else "episodes"
+    rule = f"the first {per_cell} {kind} by seed in each (task, perturbation) cell"
+    notes = []
+    if more:
+        notes.append(f"{more} more with a video are in <code>videos/</code>")
+    if missing:
+        notes.append(f"{missing} failed episode(s) have no video (run <code>realm eval</code> with <code>--videos failures</code>)")
+    if not chosen:
+        if which == "failures" and not any(r.get("status", "ok") == "ok" and not r.get("success") for r in records):
+            return "<p class='note'>Every finished episode succeeded: no failure videos to show.</p>"
+        return f"<p class='note'>No episode videos to show ({'; '.join(notes) or 'none recorded'}).</p>"
+    cards = []
+    for r in chosen:
+        label, cls = episode_label(r)
+        path = video_path(r, run_dir)
+        src = Path(os.path.relpath(path.resolve(), Path(out_dir).resolve())).as_posix()
+        poster = _poster(path)
+        poster_attr = f' poster="{poster}"' if poster else ""
+        cards.append(
+            f'<div class="vid"><video controls muted loop preload="none"{poster_attr} src="{esc(src)}"></video>'
+            f'<div><span class="tag {cls}">{esc(label)}</span> {esc(short(r["task"]))} / {esc(r["perturbation"])} / seed {r["seed"]}: '
+            f'progression {float(r["progression"]):.2f}, {r.get("steps", "?")} of {r.get("max_steps", "?")} steps</div>'
+            f'<div class="note">“{esc(r.get("instruction", ""))}”</div></div>')
+    intro = (f"<p class='note'>Exterior camera (left) and wrist camera (right), 15 fps; the still is the episode's last frame. "
+             f"Shown: {rule}{'; ' + '; '.join(notes) if notes else ''}.</p>")
+    return intro + '<div class="vids">' + "".join(cards) + "</div>"

@@ -1,0 +1,191 @@
+"""``realm sysid auto``: diagnose -> fit the top suspect -> re-diagnose from the fitted model -> ...
+
+Each round ranks the effects still missing from the current model (``diagnose``, screening
+with the model's own parameters re-tuned), fits the best suspect jointly with everything already
+kept (``fit`` with refit, started at the screened values), and **keeps the step only when the
+held-out RMSE falls by more than noise allows**: by at least ``min_gain`` of its current value and
+by at least ``min_floor_drop`` x the judging floor (a fit that only absorbed noise on the train
+split does not lower the held-out error that much). A rejected suspect is not tried again; the
+next one is. The loop stops at the floor (held-out RMSE <= ``found_factor`` x the judging floor),
+when no suspect helps, or after ``max_steps`` kept steps / ``max_fits`` fits.
+
+Verdict: ``at_floor`` (the final model is within ``found_factor`` x the judging floor),
+``partially_explained`` (steps were kept but error above the floor remains), ``unexplained``
+(nothing in the library lowered the error and it is above the floor). The judging floor is
+``diagnose.judging_floor`` (noise floor and the replay's own error on a matching plant).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from realm_ms.agents.robot_model import RobotModel
+from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose, judging_floor
+from realm_ms.sysid.fit import FitConfig, fit
+from realm_ms.sysid.timeseries import Trajectory
+
+#: velocity grid of the reported friction curve: +-0.05 ... 1.5 rad/s
+FRICTION_QD = np.concatenate([-np.linspace(1.5, 0.05, 30), np.linspace(0.05, 1.5, 30)])
+
+
+@dataclass
+class AutoConfig:
+    max_steps: int = 4  # kept effects at most
+    max_fits: int = 6  # fits at most (kept + rejected)
+    generations: int = 10  # CMA-ES generations per fit (the linearised start does most of the work)
+    popsize: int | None = None
+    min_gain: float = 0.05  # relative held-out RMSE fall a step must bring
+    min_floor_drop: float = 0.1  # ... and absolute, in units of the judging floor
+    seed: int = 0
+    diagnose: DiagnoseConfig = field(default_factory=DiagnoseConfig)
+
+
+@dataclass
+class AutoStep:
+    effect: str
+    params: dict[str, float]
+    heldout_rmse: float
+    kept: bool
+    verdict_before: str
+
+    def to_json(self) -> dict:
+        return {"effect": self.effect, "params": self.params, "heldout_rmse": self.heldout_rmse}
+
+
+def _start_spec(effect: str, params: dict[str, float]) -> str:
+    """``EFFECT:key=value,...`` starting the fit at the screened values (the bare name if those do
+    not parse, e.g. a value rounded onto a bound)."""
+    from realm_ms.sysid.effect_spec import parse_effects
+
+    spec = effect + (":" + ",".join(f"{k}={v:.9g}" for k, v in params.items()) if params else "")
+    try:
+        parse_effects(spec)
+    except ValueError:
+        return effect
+    return spec
+
+
+def friction_curve(model: RobotModel, qd: np.ndarray = FRICTION_QD) -> dict:
+    """Steady sliding friction of the model's friction effects: {qd: [...], tau: [[7] per qd]} [N·m].
+
+    ``tau`` is the torque the joint must be driven with to keep sliding at ``qd`` (same sign as qd,
+    as in Gaz et al. 2019), i.e. minus the effect's torque on the joint."""
+    import torch
+
+    from realm_ms.agents.effects.implicit_torque import ImplicitJointTorque
+
+    v = torch.as_tensor(np.repeat(qd[:, None], 7, 1), dtype=torch.float32)
+    tau = torch.zeros_like(v)
+
+    class _State:  # the friction laws read qd and dt; a huge inertia means "no stick within dt"
+        def __init__(self):
+            self.qd, self.dt = v, 1.0
+
+    for fx in model.effects:
+        if isinstance(fx, ImplicitJointTorque):
+            with torch.inference_mode():
+                tau -= fx.friction_torque(v, torch.full_like(v, 1e12), _State(), None).to(tau.dtype)
+    return {"qd": [round(float(x), 6) for x in qd], "tau": [[round(float(x), 6) for x in row] for row in tau.numpy()]}
+
+
+def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | None = None,
+         config: AutoConfig | None = None, evaluator=None, progress: bool = True, log=print) -> dict:
+    """The loop; returns the documented JSON (``docs/sysid.md``) plus ``_model`` (the final model)."""
+    cfg = config or AutoConfig()
+    model = (model or RobotModel()).copy()
+    quiet = lambda *a: None  # noqa: E731
+    bar = _bar(progress, cfg.max_fits)
+    d = diagnose(train, heldout, model, cfg.diagnose, evaluator, log=quiet)
+    nominal = float(d.baseline_heldout_rmse)
+    noise = float(d.noise_floor)
+    current = nominal
+    floor = judging_floor(noise, cfg.diagnose.replay_floor_rad)
+    log(f"auto: nominal held-out RMSE {nominal:.3e} rad, judging floor {floor:.2e} rad ({d.verdict})")
+    steps: list[AutoStep] = []
+    tried: set[str] = set()
+    fits = 0
+    while (len([s for s in steps if s.kept]) < cfg.max_steps and fits < cfg.max_fits
+           and current > cfg.diagnose.found_factor * floor):
+        cands = [s for s in d.suspects if s.score >= cfg.diagnose.min_improvement and s.effect not in tried]
+        if not cands:
+            log("auto: no remaining suspect helps")
+            break
+        sus = cands[0]
+        tried.add(sus.effect)
+        fits += 1
+        bar.set_description(f"auto: fitting {sus.effect}")
+        f = fit(train, heldout, model, FitConfig(add=_start_spec(sus.effect, sus.params), generations=cfg.generations,
+                                                 popsize=cfg.popsize, seed=cfg.seed), evaluator, progress=False, log=quiet)
+        bar.update(1)
+        after = float(f.after["heldout_rmse_rad"])
+        kept = current - after >= max(cfg.min_gain * current, cfg.min_floor_drop * floor)
+        params = {k: round(float(v), 9) for k, v in f.params.items()}
+        step = AutoStep(sus.effect, params, after, kept, d.verdict)
+        steps.append(step)
+        log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} rad "
+            + ("(kept)" if kept else "(rejected: within what noise allows)"))
+        if not kept:
+            continue
+        model, current = f.model, after
+        if current <= cfg.diagnose.found_factor * floor:
+            break
+        bar.set_description("auto: diagnosing")
+        d = diagnose(train, heldout, model, cfg.diagnose, evaluator, log=quiet)
+        noise = min(noise, float(d.noise_floor))  # the estimate is inflated by model error: keep the lowest
+        floor = judging_floor(noise, cfg.diagnose.replay_floor_rad)
+    bar.close()
+    kept = [s for s in steps if s.kept]
+    if current <= cfg.diagnose.found_factor * floor:
+        verdict = "at_floor"
+    elif kept:
+        verdict = "partially_explained"
+    else:
+        verdict = "unexplained"
+    out = {
+        "unit": "rad",
+        "nominal_heldout_rmse": nominal,
+        "steps": [s.to_json() for s in kept],
+        "final": {"heldout_rmse": current, "noise_floor": noise, "verdict": verdict},
+        "friction_curve": friction_curve(model),
+        "details": {"judging_floor": floor, "found_factor": cfg.diagnose.found_factor,
+                    "rejected": [{"effect": s.effect, "heldout_rmse": s.heldout_rmse} for s in steps if not s.kept],
+                    "message": _message(verdict, nominal, current, floor, kept)},
+        "_model": model,
+    }
+    log(out["details"]["message"])
+    return out
+
+
+def _message(verdict: str, nominal: float, final: float, floor: float, kept: list[AutoStep]) -> str:
+    chain = " -> ".join([f"nominal {nominal:.2e}"] + [f"+{s.effect} {s.heldout_rmse:.2e}" for s in kept]) + " rad"
+    if verdict == "at_floor":
+        return f"at the floor ({final:.2e} <= 1.5x {floor:.2e} rad): {chain}"
+    if verdict == "partially_explained":
+        share = 1 - max(final**2 - floor**2, 0) / max(nominal**2 - floor**2, 1e-30)
+        return (f"partially explained ({100 * share:.0f}% of the model error): {chain}; residual {final:.2e} rad "
+                f"left ({final / floor:.1f}x the floor): an effect outside the library, or a plant/controller mismatch")
+    return (f"unexplained: no effect in the library lowers the held-out RMSE {nominal:.2e} rad "
+            f"({nominal / floor:.1f}x the floor {floor:.2e} rad)")
+
+
+class _NoBar:
+    def set_description(self, *_):
+        pass
+
+    def update(self, *_):
+        pass
+
+    def close(self):
+        pass
+
+
+def _bar(progress: bool, total: int):
+    import sys
+
+    if not progress or not sys.stderr.isatty():
+        return _NoBar()
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc="auto", unit="fit", leave=False)

@@ -1,0 +1,60 @@
+"""Report sections for ``realm sysid auto``: the waterfall of kept steps and the friction curves."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from realm_ms.sysid.report.figures import new, to_img
+from realm_ms.sysid.report.html import esc, table
+from realm_ms.sysid.report.sections import JOINTS, ReportData
+
+
+def auto_waterfall(d: ReportData):
+    a = getattr(d, "auto", None)
+    if not a:
+        return "Auto waterfall", "<p>No <code>auto --json</code> given (pass <code>--auto AUTO.json</code>).</p>"
+    unit = a.get("unit", "rad")
+    scale, shown = (1e3, "mrad") if unit == "rad" else (1.0, unit)
+    labels = ["nominal"] + [f"+ {s['effect']}" for s in a["steps"]]
+    vals = np.array([a["nominal_heldout_rmse"]] + [s["heldout_rmse"] for s in a["steps"]])
+    fin = a["final"]
+    floor = (a.get("details") or {}).get("judging_floor", fin["noise_floor"])
+    fig, ax = new(1, 1, 9, 3.2)
+    x = ax[0, 0]
+    x.bar(range(len(vals)), vals * scale, color=["tab:red"] + ["tab:blue"] * (len(vals) - 1))
+    x.axhline(fin["noise_floor"] * scale, color="k", ls="--", lw=1, label="noise floor")
+    x.axhline(1.5 * floor * scale, color="tab:green", ls=":", lw=1, label="1.5x judging floor")
+    x.set_xticks(range(len(vals)), labels, rotation=20, fontsize=8)
+    x.set_ylabel(f"held-out RMSE [{shown}]")
+    x.legend(fontsize=8)
+    rows = [[lab, f"{v:.3e}", f"{v / max(floor, 1e-30):.1f}"] for lab, v in zip(labels, vals)]
+    for r in (a.get("details") or {}).get("rejected", []):
+        rows.append([f"(rejected) {r['effect']}", f"{r['heldout_rmse']:.3e}", f"{r['heldout_rmse'] / max(floor, 1e-30):.1f}"])
+    msg = (a.get("details") or {}).get("message", "")
+    head = f"<p>verdict <b>{esc(fin['verdict'])}</b>. {esc(msg)}</p>"
+    return ("Auto: nominal → + effect → …", head + to_img(fig, "auto waterfall")
+            + table(["model", f"held-out RMSE [{unit}]", "/ judging floor"], rows))
+
+
+def friction_curves(d: ReportData):
+    from realm_ms.sysid.auto import friction_curve
+
+    if d.model is None:
+        return "Friction curves", "<p>No model.</p>"
+    fc = friction_curve(d.model)
+    tau = np.array(fc["tau"])
+    if not np.any(tau):
+        return "Friction curves", "<p>The model has no friction effect.</p>"
+    qd = np.array(fc["qd"])
+    fig, ax = new(1, 1, 9, 3.2)
+    a = ax[0, 0]
+    for j in range(7):
+        a.plot(qd[qd < 0], tau[qd < 0, j], color=f"C{j}", label=JOINTS[j])
+        a.plot(qd[qd > 0], tau[qd > 0, j], color=f"C{j}")
+    a.axhline(0, color="k", lw=0.5)
+    a.set_xlabel("joint velocity [rad/s]")
+    a.set_ylabel("friction torque [N·m]")
+    a.legend(fontsize=7, ncol=7)
+    return ("Friction curves of the model (steady sliding)",
+            "<p class='note'>Torque needed to keep each joint sliding at q̇ (same sign as q̇, as in Gaz et al. 2019); "
+            "the same grid as <code>auto --json</code> → <code>friction_curve</code>.</p>" + to_img(fig, "friction curves"))

@@ -1,0 +1,1 @@
+"""Torque-space system identification: data with measured joint torque, no ``q_cmd`` needed."""

@@ -1,0 +1,158 @@
+"""Compare, diagnose, fit and iterate in torque space: the inverse-dynamics residual.
+
+Data: trajectories with measured joint torque ``tau`` (N·m) from any controller (``q_cmd`` not
+needed). ``q̇``/``q̈`` come from ``smoothing.derivatives`` (Savitzky-Golay). The residual
+``r = tau - ID(q, q̇, q̈) - Σ terms`` (``terms.py``) is scored per joint in N·m; the first and
+last half-window of every trajectory (where the SG fit extrapolates) are not scored.
+
+Fitting is a bounded nonlinear least squares (``scipy.optimize.least_squares``, trust region
+reflective) in the parameters' unit coordinates, from the off-values and from the typical
+strengths (the better wins): no simulation, so a diagnosis fits every candidate fully.
+
+Noise floor: the median absolute second difference of the raw residual per joint / sqrt(6) (white
+noise), an upper bound like the position-space one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from realm_ms.sysid.timeseries import Trajectory
+from realm_ms.sysid.torque.smoothing import SmoothingConfig, derivatives
+from realm_ms.sysid.torque.terms import EXTRA_SPECS, TERMS, TRACKING_ONLY, Samples
+
+UNIT = "N·m"
+
+
+@dataclass
+class TorqueSet:
+    """Scored samples of a list of trajectories: measured torque and the nominal residual."""
+
+    samples: Samples
+    tau: np.ndarray  # (N, 7)
+    nominal: np.ndarray  # (N, 7) ID of the URDF at the smoothed state
+    noise: np.ndarray  # (7,) noise-floor estimate per joint
+
+    @classmethod
+    def build(cls, trajs: list[Trajectory], arm, smoothing: SmoothingConfig = SmoothingConfig(),
+              max_samples: int | None = None) -> "TorqueSet":
+        qs, vs, as_, ts = [], [], [], []
+        for tr in trajs:
+            if tr.tau is None:
+                raise ValueError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
+            q, v, a = derivatives(tr.t, tr.q, tr.qd, smoothing)
+            dt = float(np.median(np.diff(tr.t)))
+            cut = max(1, int(round(smoothing.window_s / dt / 2)))
+            sl = slice(cut, len(tr.t) - cut)
+            qs.append(q[sl]); vs.append(v[sl]); as_.append(a[sl]); ts.append(tr.tau[sl])
+        q, v, a, tau = (np.concatenate(x) for x in (qs, vs, as_, ts))
+        if max_samples and len(q) > max_samples:  # evenly thinned: the fit needs coverage, not every ms
+            idx = np.linspace(0, len(q) - 1, max_samples).astype(int)
+            q, v, a, tau = q[idx], v[idx], a[idx], tau[idx]
+        t64 = lambda x: torch.as_tensor(x, dtype=torch.float64)  # noqa: E731
+        s = Samples(t64(q), t64(v), t64(a), arm)
+        with torch.inference_mode():
+            nominal = arm.rnea(s.q, s.qd, s.qdd).numpy()
+        d2 = np.diff(tau - nominal, 2, axis=0)
+        noise = 1.4826 * np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0) / np.sqrt(6)
+        return cls(s, tau, nominal, noise)
+
+
+def torque_arm():
+    from realm_ms.sysid.diagnose import _arm_model
+
+    return _arm_model().to(dtype=torch.float64)
+
+
+# ---------------------------------------------------------------------------- parameters
+@dataclass
+class Term:
+    """One effect in torque space: name, config, and its free parameters (key -> spec)."""
+
+    name: str
+    config: object
+    specs: list  # [(key, ParamSpec)]
+    values: dict[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def make(cls, name: str, values: dict | None = None) -> "Term":
+        if name in TRACKING_ONLY:
+            raise ValueError(f"{name} acts through the position controller (tracking): it needs `q_cmd` in the data; "
+                             "in torque space use friction, viscous, armature, payload, gravity or link-mass effects")
+        if name not in TERMS:
+            raise ValueError(f"unknown torque-space effect {name!r}; known: {', '.join(TERMS)}")
+        if name in EXTRA_SPECS:
+            specs, config = EXTRA_SPECS[name], None
+        else:
+            from realm_ms.agents.effects import make_effect
+
+            fx = make_effect(name)
+            specs, config = fx.specs, fx.config
+        keys = []
+        for sp in specs:
+            if not sp.fit_by_default:
+                continue
+            keys += [(f"{sp.name}{j}", sp) for j in range(1, 8)] if sp.per_joint else [(sp.name, sp)]
+        t = cls(name, config, keys, {k: sp.off for k, sp in keys})
+        if values:
+            t.values.update({k: float(v) for k, v in values.items() if k in t.values})
+        return t
+
+    def nominal_values(self) -> dict[str, float]:
+        return {k: sp.nominal for k, sp in self.specs}
+
+    def torque(self, s: Samples) -> np.ndarray:
+        with torch.inference_mode():
+            return TERMS[self.name](self.values, s, self.config).numpy()
+
+
+def _pack(terms: list[Term]):
+    keys = [(t, k, sp) for t in terms for k, sp in t.specs]
+    lo = np.array([sp.lo for _, _, sp in keys])
+    hi = np.array([sp.hi for _, _, sp in keys])
+    return keys, lo, hi
+
+
+def _set(keys, x):
+    for (t, k, _), v in zip(keys, x):
+        t.values[k] = float(v)
+
+
+def predict(terms: list[Term], s: Samples, n: int) -> np.ndarray:
+    out = np.zeros((n, 7))
+    for t in terms:
+        out += t.torque(s)
+    return out
+
+
+def rmse(ts: TorqueSet, terms: list[Term]) -> tuple[float, np.ndarray]:
+    r = ts.tau - ts.nominal - predict(terms, ts.samples, len(ts.tau))
+    return float(np.sqrt(np.mean(r**2))), np.sqrt(np.mean(r**2, axis=0))
+
+
+def fit_terms(train: TorqueSet, terms: list[Term], starts: tuple[str, ...] = ("current", "nominal")) -> float:
+    """Least squares of all free parameters of ``terms`` on ``train`` (in place); train RMSE."""
+    from scipy.optimize import least_squares
+
+    keys, lo, hi = _pack(terms)
+    if not keys:
+        return rmse(train, terms)[0]
+    span = hi - lo
+    target = train.tau - train.nominal
+
+    def resid(u):
+        _set(keys, lo + u * span)
+        return (target - predict(terms, train.samples, len(target))).ravel()
+
+    best = None
+    for start in starts:
+        x0 = np.array([t.values[k] if start == "current" else sp.nominal for t, k, sp in keys])
+        u0 = np.clip((x0 - lo) / span, 0, 1)
+        sol = least_squares(resid, u0, bounds=(0, 1), method="trf", x_scale=1.0, max_nfev=60)
+        if best is None or sol.cost < best.cost:
+            best = sol
+    _set(keys, lo + best.x * span)
+    return rmse(train, terms)[0]
