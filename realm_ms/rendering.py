@@ -199,32 +199,6 @@ def light_gain(shader: str) -> float:
     return LIGHT_GAIN[shader]
 
 
-# ---------------------------------------------------------------------------------------- V-LIGHT
-# REALM (Isaac Sim) sets one intensity I ~ U(20,000, 750,000) on every scene light plus a colour
-# N([255, 214, 170], 15)/255. Isaac's RTX camera auto-exposes and tone-maps, so pixel brightness
-# grows far slower than I; we map I onto a multiplier of our scenes' calibrated lights with a
-# square-root law anchored at the geometric mid-range (see docs/rendering.md).
-REALM_LIGHT_RANGE = (20_000.0, 750_000.0)
-REALM_LIGHT_REF = float(np.sqrt(REALM_LIGHT_RANGE[0] * REALM_LIGHT_RANGE[1]))  # ~122,474 -> gain 1
-REALM_LIGHT_EXPONENT = 0.5
-REALM_LIGHT_COLOR = (255.0, 214.0, 170.0)
-
-
-def realm_light_to_scene(intensity: float, color=REALM_LIGHT_COLOR) -> np.ndarray:
-    """RGB multiplier for our scene lights equivalent to REALM's V-LIGHT ``intensity`` and ``color``
-    (0..255 per channel): ``(intensity / REALM_LIGHT_REF) ** 0.5 * color / 255``.
-
-    ``realm_light_to_scene(20_000)`` -> 0.40 x warm white, ``(750_000)`` -> 2.47 x warm white.
-    Multiply each scene light's colour (and the ambient term) by it.
-    """
-    if not np.isfinite(intensity) or intensity <= 0:
-        raise ValueError(f"light intensity must be positive, got {intensity}")
-    c = np.clip(np.asarray(color, float), 0, 255) / 255.0
-    if c.shape != (3,):
-        raise ValueError(f"light colour must be 3 values in 0..255, got {color}")
-    return (float(intensity) / REALM_LIGHT_REF) ** REALM_LIGHT_EXPONENT * c
-
-
 # ---------------------------------------------------------------------------------------- helpers
 def vertical_fov(hfov_deg: float, width: int, height: int) -> float:
     """ManiSkill cameras take the vertical FOV (rad); DROID camera specs give the horizontal one."""
@@ -239,6 +213,3 @@ def frame_stats(img) -> tuple[float, float]:
         a = np.clip(a, 0.0, 1.0) * 255.0
     return float(a.mean()), float(a.std())
 
-
-def is_blank(img, min_std: float = BLANK_STD) -> bool:
-    return frame_stats(img)[1] < min_std

@@ -104,18 +104,6 @@ def check_port(value: Any, where: str) -> int:
         raise InputError(f"{e} (a TCP port is 1..65535)") from None
 
 
-def check_input_file(path: str | os.PathLike, where: str, suffixes: tuple[str, ...] = ()) -> Path:
-    """An existing regular file (with one of ``suffixes`` if given)."""
-    p = Path(path)
-    if not p.exists():
-        raise InputError(f"{where}: {p} does not exist")
-    if p.is_dir():
-        raise InputError(f"{where}: {p} is a directory, expected a file")
-    if suffixes and p.suffix.lower() not in suffixes:
-        raise InputError(f"{where}: {p} should be a {' or '.join(suffixes)} file")
-    return p
-
-
 def check_output_path(path: str | os.PathLike, where: str, kind: str = "file", example: str | None = None) -> Path:
     """An output path that can be written, checked before any work: ``kind="file"`` (not an
     existing directory) or ``kind="dir"`` (not an existing file); a path below a file, or in a
@@ -179,12 +167,6 @@ def _check_writable_dir(d: Path, p: Path, where: str) -> None:
         raise InputError(f"{where}: {what} ({e.strerror})") from None
     os.close(fd)
     os.unlink(probe)
-
-
-def check_choice(value: Any, where: str, choices: tuple[str, ...] | list[str]) -> str:
-    if value not in choices:
-        raise InputError(f"{where}: unknown value {value!r}; choose one of {', '.join(map(str, choices))}")
-    return value
 
 
 # ---------------------------------------------------------------------------- argparse types

@@ -141,20 +141,6 @@ def test_bad_names_are_clear_errors():
         rendering.camera_shader_config("rt", "nvidia")
 
 
-def test_realm_light_mapping():
-    lo, hi = rendering.REALM_LIGHT_RANGE
-    white = (255, 255, 255)
-    g_lo = rendering.realm_light_to_scene(lo, white)
-    g_ref = rendering.realm_light_to_scene(rendering.REALM_LIGHT_REF, white)
-    g_hi = rendering.realm_light_to_scene(hi, white)
-    np.testing.assert_allclose(g_ref, 1.0)
-    assert 0.3 < g_lo[0] < 0.5 and 2.0 < g_hi[0] < 3.0  # compressed (Isaac auto-exposure), monotonic
-    warm = rendering.realm_light_to_scene(rendering.REALM_LIGHT_REF)
-    np.testing.assert_allclose(warm, np.array(rendering.REALM_LIGHT_COLOR) / 255)
-    with pytest.raises(ValueError):
-        rendering.realm_light_to_scene(-1.0)
-
-
 def test_rt_samples_cap():
     with rendering.rt_samples_per_pixel(4):
         fast = rendering.camera_shader_config("rt-fast", "none").shader_pack_config

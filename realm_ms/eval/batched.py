@@ -34,7 +34,7 @@ import numpy as np
 
 from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
-from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, advance_episode, episode_record, jsonable, make_env, unsupported_record
+from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, advance_episode, build_cell_env, episode_record, jsonable, unsupported_record
 from realm_ms.eval.backend import Backend
 
 # keys of ``info["perturbation"]`` that hold one entry per sub-env (a slot's record keeps its row)
@@ -118,7 +118,7 @@ class Group:
 class BatchedBackend(Backend):
     """``groups`` envs of ``num_envs`` sub-envs each, on ``sim_backend`` (see the module docstring)."""
 
-    def __init__(self, cfg: RunConfig, num_envs: int, groups: int = 1, sim_backend: str = "physx_cuda", env_factory=make_env):
+    def __init__(self, cfg: RunConfig, num_envs: int, groups: int = 1, sim_backend: str = "physx_cuda", env_factory=build_cell_env):
         if num_envs > 1 and sim_backend in ("cpu", "physx_cpu"):
             raise ValueError("ManiSkill's CPU simulation runs one sub-env per env: use num_envs=1 (and groups=N) with physx_cpu")
         self.cfg = dataclasses.replace(cfg, env_kwargs=cfg.env_kwargs | dict(num_envs=num_envs, sim_backend=sim_backend))

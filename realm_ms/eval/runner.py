@@ -67,11 +67,10 @@ def jsonable(x):
     return x
 
 
-def make_env(task: str, perturbation: str, cfg: RunConfig):
-    """The env for one (task, perturbation) cell; ``perturbation=`` is passed unless Default."""
-    import gymnasium as gym
-
-    import realm_ms  # noqa: F401  (registers the REALM-* envs)
+def cell_config(task: str, perturbation: str, cfg: RunConfig):
+    """The env of one (task, perturbation) cell as a ``RealmEnvConfig`` (what every backend builds
+    and every record stores), and the ManiSkill keywords it has no field for."""
+    from realm_ms.tasks.config import RealmEnvConfig
 
     kw = dict(
         obs_mode="rgb" if cfg.needs_rgb() else "state_dict",
@@ -80,13 +79,17 @@ def make_env(task: str, perturbation: str, cfg: RunConfig):
         success_tail=cfg.success_tail,
         camera_width=cfg.obs.width,
         camera_height=cfg.obs.height,
+        perturbation=None if perturbation == DEFAULT else perturbation,
     )
-    kw.update(cfg.env_kwargs)
-    if perturbation != DEFAULT:
-        import realm_ms.perturbations  # noqa: F401  (installs the env's perturbation resolver in this process)
+    return RealmEnvConfig.from_gym_kwargs(task, kw | cfg.env_kwargs)
 
-        kw["perturbation"] = perturbation
-    return gym.make(task, **kw)
+
+def build_cell_env(task: str, perturbation: str, cfg: RunConfig):
+    """The env for one (task, perturbation) cell, through the one factory ``tasks.make_env``."""
+    from realm_ms.tasks.config import make_env
+
+    config, rest = cell_config(task, perturbation, cfg)
+    return make_env(config, **rest)
 
 
 class EpisodeRunner:
@@ -104,7 +107,7 @@ class EpisodeRunner:
         if self.cell == key.cell() and self.env is not None:
             return
         self.close()
-        self.env = make_env(key.task, key.perturbation, self.cfg)
+        self.env = build_cell_env(key.task, key.perturbation, self.cfg)
         self.cell = key.cell()
         self.env_policy = None
 
@@ -225,7 +228,8 @@ class EpisodeRunner:
 def _base_record(cfg: RunConfig, key: EpisodeKey) -> dict:
     from realm_ms.agents.droid_action_spaces import action_space_name
 
-    return dict(task=key.task, perturbation=key.perturbation, seed=key.seed, policy=cfg.policy, action_space=action_space_name(cfg.env_kwargs))
+    return dict(task=key.task, perturbation=key.perturbation, seed=key.seed, policy=cfg.policy, action_space=action_space_name(cfg.env_kwargs),
+                config=cell_config(key.task, key.perturbation, cfg)[0].to_dict())
 
 
 def advance_episode(ep, progression: float, stage_hits) -> None:
@@ -387,4 +391,4 @@ def default_workers() -> int:
     return max(1, min(os.cpu_count() or 1, 16))
 
 
-__all__ = ["RunConfig", "EpisodeRunner", "run_plan", "make_env", "Progress", "default_workers"]
+__all__ = ["RunConfig", "EpisodeRunner", "run_plan", "build_cell_env", "cell_config", "Progress", "default_workers"]

@@ -87,6 +87,7 @@ class EpisodeRecord:
     kept: bool
     episode_index: int | None = None  # index in the dataset when kept
     params: list | None = None  # the drawn perturbation parameters per sub-env (info["perturbation"]["params"])
+    config: dict | None = None  # the env's RealmEnvConfig.to_dict(): RealmEnvConfig.from_dict re-creates it
 
 
 # Hugging Face Hub repo ids: OWNER/NAME, letters, digits, '-', '_', '.'; no '--' or '..'; <= 96 chars
@@ -298,7 +299,8 @@ def _open(cfg: ExportConfig) -> tuple[_Writer, list[dict]]:
 
 
 def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]) -> dict:
-    from realm_ms.lerobot.rollout import make_env, make_export_policy, record_episode
+    from realm_ms.lerobot.rollout import make_export_policy, record_episode, rollout_config
+    from realm_ms.tasks.config import make_env
 
     root = writer.root
     total = sum(c.want for c in cells)
@@ -308,7 +310,8 @@ def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]
         for cell in cells:
             if cell.want == 0 or not cell.jobs:
                 continue
-            env = make_env(cell.task, cfg.width, cfg.height, None, cfg.shader, perturbation=cell.perturbation)
+            env_config, rest = rollout_config(cell.task, cfg.width, cfg.height, None, cfg.shader, perturbation=cell.perturbation)
+            env = make_env(env_config, **rest)
             policies: dict[str, object] = {}
             want = cell.want
             try:
@@ -327,7 +330,7 @@ def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]
                     keep = res.success or not cfg.success_only
                     rec = EpisodeRecord(job.task, job.perturbation, job.seed, job.policy, res.instruction, res.steps,
                                         res.progression, res.success, keep, writer.num_episodes if keep else None,
-                                        (res.perturbation or {}).get("params"))
+                                        (res.perturbation or {}).get("params"), env_config.to_dict())
                     _append_sidecar(root, rec)  # before the save: a crash mid-save is filtered on resume
                     if keep:
                         writer.save()

@@ -27,11 +27,13 @@ class RealmLeRobotEnv(gym.Env):
                  observation_height: int = DEFAULT_SIZE[1], episode_length: int | None = None,
                  shader: str = "default", perturbation: str | None = None, render_mode: str = "rgb_array", **env_kwargs):
         super().__init__()
-        from realm_ms.lerobot.rollout import make_env
+        from realm_ms.lerobot.rollout import rollout_config
+        from realm_ms.tasks.config import make_env
 
         self.task = task
         self.render_mode = render_mode
-        self._env = make_env(task, observation_width, observation_height, episode_length, shader, perturbation, **env_kwargs)
+        self.config, rest = rollout_config(task, observation_width, observation_height, episode_length, shader, perturbation, **env_kwargs)
+        self._env = make_env(self.config, **rest)
         u = self._env.unwrapped
         self._max_episode_steps = int(episode_length or u.spec.max_episode_steps or u.task_spec.horizon)
         self.task_description = u.get_language_instruction()[0]

@@ -1,6 +1,7 @@
 """The episode loop of ``realm export``: one env (num_envs = 1), one policy, one frame per control step.
 
-``make_env`` builds the REALM env with the cameras the export stores; ``make_export_policy`` turns a
+``rollout_config`` describes the REALM env with the cameras the export stores (``tasks.make_env``
+builds it; every exported episode stores the config); ``make_export_policy`` turns a
 policy spec into a per-step actor (``expert`` directly; any other spec of ``realm eval``'s policy
 registry, e.g. ``lerobot:DIR``, through its chunked interface, re-planning every ``replan_every``
 steps as ``realm eval`` does); ``record_episode`` resets with a seed (and optionally replays recorded
@@ -32,19 +33,17 @@ class EpisodeResult:
     perturbation: dict | None  # the env's info["perturbation"] after reset (names + drawn params)
 
 
-def make_env(task: str, width: int = DEFAULT_SIZE[0], height: int = DEFAULT_SIZE[1], max_steps: int | None = None,
-             shader: str = "default", perturbation: str | None = None, **env_kwargs):
-    """The REALM env ``task`` with RGB cameras at ``width`` x ``height`` (batched torch, num_envs = 1)."""
-    import gymnasium as gym
+def rollout_config(task: str, width: int = DEFAULT_SIZE[0], height: int = DEFAULT_SIZE[1], max_steps: int | None = None,
+                   shader: str = "default", perturbation: str | None = None, **env_kwargs):
+    """The REALM env ``task`` with RGB cameras at ``width`` x ``height`` (batched torch, num_envs = 1),
+    as a ``RealmEnvConfig`` plus the ManiSkill keywords it has no field for."""
+    from realm_ms.tasks.config import RealmEnvConfig
 
-    import realm_ms  # noqa: F401  (registers REALM-* ids and the perturbations)
-
-    kw = dict(obs_mode="rgb", control_mode="droid_joint_pos", camera_width=width, camera_height=height, shader=shader, **env_kwargs)
+    kw = dict(obs_mode="rgb", control_mode="droid_joint_pos", camera_width=width, camera_height=height, shader=shader,
+              perturbation=None if perturbation in (None, DEFAULT_PERTURBATION) else perturbation)
     if max_steps:
         kw["max_episode_steps"] = int(max_steps)
-    if perturbation and perturbation != DEFAULT_PERTURBATION:
-        kw["perturbation"] = perturbation
-    return gym.make(task, **kw)
+    return RealmEnvConfig.from_gym_kwargs(task, kw | env_kwargs)
 
 
 class ChunkedPolicy:

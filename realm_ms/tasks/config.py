@@ -89,6 +89,19 @@ class RealmEnvConfig:
         _check_maniskill_kwargs(rest)
         return dataclasses.replace(cfg, **top), rest
 
+    @classmethod
+    def from_gym_kwargs(cls, task: str, kwargs: dict) -> tuple["RealmEnvConfig", dict]:
+        """The config that ``gym.make(task, **kwargs)`` describes, ManiSkill's own fields and the
+        horizon (``max_episode_steps``) included; returns it and the keywords it has no field for
+        (ManiSkill's others, e.g. ``sim_config``), to pass on to :func:`make_env`."""
+        kwargs = dict(kwargs)
+        horizon = kwargs.pop("max_episode_steps", None)
+        cfg, rest = cls.from_kwargs(kwargs.pop("config", None), kwargs)
+        top = {name: rest.pop(name) for name in _GYM_FIELDS if name in rest}
+        if horizon is not None:
+            top["horizon"] = horizon
+        return dataclasses.replace(cfg, task=task, **top), rest
+
     # ------------------------------------------------------------------ serialisation
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -143,6 +156,10 @@ KWARG_FIELDS: dict[str, tuple[str, str]] = {
     "action_space": ("top", "action_space"),
     "gripper_action_space": ("top", "gripper_action_space"),
 }
+
+
+# ManiSkill / gymnasium keywords that are fields of the config (gym.make takes them itself)
+_GYM_FIELDS = ("obs_mode", "control_mode", "num_envs", "sim_backend", "render_mode")
 
 
 def make_env(config: RealmEnvConfig, **overrides):

@@ -1,16 +1,15 @@
 """Compare, diagnose, fit and iterate in torque space: the inverse-dynamics residual.
 
 Data: trajectories with measured joint torque ``tau`` (N·m) from any controller (``q_cmd`` not
-needed). ``q̇``/``q̈`` come from ``smoothing.derivatives`` (Savitzky-Golay). The residual
-``r = tau - ID(q, q̇, q̈) - Σ terms`` (``terms.py``) is scored per joint in N·m; the first and
-last half-window of every trajectory (where the SG fit extrapolates) are not scored.
+needed). ``q̈`` and the consistently smoothed torque come from ``smoothing.smooth`` (Savitzky-Golay).
+The residual ``r = tau - ID(q, q̇, q̈) - Σ terms`` (``terms.py``) is scored per joint in N·m; the
+first and last window of every trajectory (where the SG fit extrapolates) are not scored.
 
 Fitting is a bounded nonlinear least squares (``scipy.optimize.least_squares``, trust region
 reflective) in the parameters' unit coordinates, from the off-values and from the typical
 strengths (the better wins): no simulation, so a diagnosis fits every candidate fully.
 
-Noise floor: the median absolute second difference of the raw residual per joint / sqrt(6) (white
-noise), an upper bound like the position-space one.
+Noise floor: the sensor noises propagated through the smoothing (``smoothing.noise_floor``).
 """
 
 from __future__ import annotations
@@ -21,7 +20,7 @@ import numpy as np
 import torch
 
 from realm_ms.sysid.timeseries import Trajectory
-from realm_ms.sysid.torque.smoothing import SmoothingConfig, derivatives
+from realm_ms.sysid.torque.smoothing import SmoothingConfig, noise_floor, smooth
 from realm_ms.sysid.torque.terms import EXTRA_SPECS, TERMS, TRACKING_ONLY, Samples
 
 UNIT = "N·m"
@@ -39,16 +38,23 @@ class TorqueSet:
     @classmethod
     def build(cls, trajs: list[Trajectory], arm, smoothing: SmoothingConfig = SmoothingConfig(),
               max_samples: int | None = None) -> "TorqueSet":
-        qs, vs, as_, ts = [], [], [], []
+        parts, noise_var, weights = [], [], []
         for tr in trajs:
             if tr.tau is None:
                 raise ValueError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
-            q, v, a = derivatives(tr.t, tr.q, tr.qd, smoothing)
+            sm = smooth(tr.t, tr.q, tr.tau, tr.qd, smoothing)
             dt = float(np.median(np.diff(tr.t)))
-            cut = max(1, int(round(smoothing.window_s / dt / 2)))
-            sl = slice(cut, len(tr.t) - cut)
-            qs.append(q[sl]); vs.append(v[sl]); as_.append(a[sl]); ts.append(tr.tau[sl])
-        q, v, a, tau = (np.concatenate(x) for x in (qs, vs, as_, ts))
+            cut = max(1, int(round(smoothing.window_s / dt)))  # SG extrapolates near the ends
+            sl = slice(cut, len(sm.tau) - cut)
+            if sl.stop - sl.start < 10:
+                raise ValueError(f"{tr.name}: too short for torque space ({len(tr.t)} samples)")
+            parts.append((sm.q[sl], sm.qd[sl], sm.qdd[sl], sm.tau[sl]))
+            qt = torch.as_tensor(sm.q[sl][:: max(1, (sl.stop - sl.start) // 200)], dtype=torch.float64)
+            with torch.inference_mode():
+                msq = (arm.mass_matrix(qt) ** 2).mean(0).numpy()
+            noise_var.append(noise_floor(sm, msq) ** 2)
+            weights.append(sl.stop - sl.start)
+        q, v, a, tau = (np.concatenate([p[i] for p in parts]) for i in range(4))
         if max_samples and len(q) > max_samples:  # evenly thinned: the fit needs coverage, not every ms
             idx = np.linspace(0, len(q) - 1, max_samples).astype(int)
             q, v, a, tau = q[idx], v[idx], a[idx], tau[idx]
@@ -56,8 +62,7 @@ class TorqueSet:
         s = Samples(t64(q), t64(v), t64(a), arm)
         with torch.inference_mode():
             nominal = arm.rnea(s.q, s.qd, s.qdd).numpy()
-        d2 = np.diff(tau - nominal, 2, axis=0)
-        noise = 1.4826 * np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0) / np.sqrt(6)
+        noise = np.sqrt(np.average(np.array(noise_var), axis=0, weights=weights))
         return cls(s, tau, nominal, noise)
 
 

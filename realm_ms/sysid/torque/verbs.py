@@ -11,7 +11,7 @@ from realm_ms.sysid.timeseries import Trajectory
 from realm_ms.sysid.torque.space import UNIT, Term, TorqueSet, fit_terms, rmse, torque_arm
 from realm_ms.sysid.torque.terms import TERMS, TRACKING_ONLY
 
-MAX_FIT_SAMPLES = 20000  # train samples the least squares sees (evenly thinned); held-out uses all
+MAX_FIT_SAMPLES = 6000  # train samples the least squares sees (evenly thinned); held-out uses all
 
 
 def _sets(train, held):
