@@ -56,11 +56,9 @@ class RealmEnvConfig(EnvConfig):
 
     @property
     def gym_kwargs(self) -> dict:
-        kw = dict(observation_width=self.observation_width, observation_height=self.observation_height,
-                  episode_length=self.episode_length, shader=self.shader)
-        if self.perturbation and self.perturbation != "Default":
-            kw["perturbation"] = self.perturbation
-        return kw
+        # RealmLeRobotEnv maps these onto realm_ms's RealmEnvConfig (lerobot.rollout.rollout_config)
+        return dict(observation_width=self.observation_width, observation_height=self.observation_height,
+                    episode_length=self.episode_length, shader=self.shader, perturbation=self.perturbation)
 
     def create_envs(self, n_envs: int, use_async_envs: bool = False):
         """``{task id: {0: VectorEnv of n_envs RealmLeRobotEnv}}`` (async: one process per env)."""

@@ -52,13 +52,7 @@ def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
         if name not in load:
             sub.add_parser(name, help=help_text, add_help=False)
             continue
-        try:
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as e:
-            if e.name and e.name.startswith(module.rsplit(".", 1)[0]):
-                continue  # area not installed in this checkout
-            raise
-        mod.add_parser(sub)
+        importlib.import_module(module).add_parser(sub)
     return parser
 
 

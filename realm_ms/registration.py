@@ -6,7 +6,8 @@ it with ManiSkill's own ``make``. The spec mirrors what ManiSkill's ``register_e
 its time-limit wrapper, no env checker), and ``register_task`` swaps it for ManiSkill's own when the
 task module loads, so the first env of a process is wrapped exactly like every later one.
 
-``TASK_MODULES`` is the one list of tasks: ``realm_ms.tasks`` imports exactly these modules.
+``TASK_MODULES`` is the one list of tasks: ``realm_ms.tasks`` imports exactly these modules. The
+constants here are shared by every layer and cost no import.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ TASK_MODULES: dict[str, str] = {
     "REALM-PushSwitch-v1": "push_switch",
 }
 HORIZON = 800  # control steps, REALM's episode length (TaskSpec.horizon's default)
+DEFAULT = "Default"  # the unperturbed setting (perturbation id 0): the one spelling every layer uses
 
 
 def load_task_pack() -> None:

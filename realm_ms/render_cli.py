@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-CAMERAS = ("exterior_1", "exterior_2", "wrist")
+from realm_ms.rendering import CAMERA_UIDS as CAMERAS
 
 
 def _size(text: str) -> tuple[int, int]:

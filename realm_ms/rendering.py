@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 SHADERS = ("default", "rt-fast", "rt-med", "rt", "minimal")
+CAMERA_UIDS = ("exterior_1", "exterior_2", "wrist")  # every REALM env's cameras (the task's two + the wrist)
 DENOISERS = ("auto", "optix", "oidn", "none")
 _AUTO_ORDER = ("optix", "oidn")
 

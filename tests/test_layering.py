@@ -4,7 +4,7 @@ Layers, lowest first (a package may import only packages of lower layers, its ow
 the leaf utilities)::
 
     registry, registration, errors, validate,        leaf utilities (registration: REALM ids,
-    contacts, rendering, known_warnings               imports the pack by name on first make)
+    contacts, rendering, known_warnings, jsonable     imports the pack by name on first make)
     agents, assets, asset_pipeline                    the robot; objects and their pipeline
     tasks, sysid                                      envs (on agents + assets); sysid (on agents)
     perturbations                                     reconfiguration hooks on tasks
@@ -29,7 +29,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("realm_ms", "asset_pipeline", "lerobot_env_realm")
-LEAVES = {"realm_ms.registry", "realm_ms.registration", "realm_ms.known_warnings", "realm_ms.errors", "realm_ms.validate", "realm_ms.contacts", "realm_ms.rendering"}
+LEAVES = {"realm_ms.registry", "realm_ms.registration", "realm_ms.known_warnings", "realm_ms.errors", "realm_ms.validate", "realm_ms.contacts", "realm_ms.rendering",
+          "realm_ms.jsonable"}
 LAYERS = [
     {"realm_ms.agents", "realm_ms.assets", "asset_pipeline"},
     {"realm_ms.tasks", "realm_ms.sysid"},

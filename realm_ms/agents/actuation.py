@@ -30,7 +30,6 @@ import torch
 
 if TYPE_CHECKING:
     from realm_ms.agents.arm_model import ArmModel
-    from realm_ms.agents.control.presets import BatchedGains
 
 
 @dataclass
@@ -63,7 +62,9 @@ class ActuationStage:
     def command(self, q_target: torch.Tensor, state: ControlState) -> torch.Tensor:
         return q_target
 
-    def gains(self, gains: "BatchedGains") -> "BatchedGains":
+    def gains(self, gains):
+        """The real loop's gains from the nominal ones (``realm_ms.agents.control.BatchedGains``;
+        this module stays below the controller, so the type is named here, not imported)."""
         return gains
 
     def actuator(self, tau: torch.Tensor, state: ControlState) -> torch.Tensor:

@@ -34,8 +34,9 @@ import numpy as np
 
 from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
-from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, advance_episode, build_cell_env, episode_record, jsonable, unsupported_record
+from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, advance_episode, build_cell_env, episode_record, unsupported_record
 from realm_ms.eval.backend import Backend
+from realm_ms.jsonable import jsonable
 
 # keys of ``info["perturbation"]`` that hold one entry per sub-env (a slot's record keeps its row)
 PER_ENV_PERTURBATION_KEYS = ("episode_seed", "instruction", "skill", "params")

@@ -14,7 +14,7 @@ import os
 import sys
 from pathlib import Path
 
-from realm_ms.eval.protocol import PRESETS
+from realm_ms.eval.protocol import DEFAULT, PRESETS
 
 
 def add_parser(sub) -> None:
@@ -49,7 +49,7 @@ def add_parser(sub) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--out", type=Path, help="required: run directory (run.json, records.jsonl, metrics.json); the same --out resumes")
     rsub = p.add_subparsers(dest="eval_command", title="report a finished run", metavar="report RUN/")
-    r = rsub.add_parser("report", help="HTML report (+ PNGs, markdown/CSV table) of a run directory")
+    r = rsub.add_parser("report", prog="realm eval report", help="HTML report (+ PNGs, markdown/CSV table) of a run directory")
     r.add_argument("run_dir", type=Path, help="run directory written by `realm eval`")
     r.add_argument("--out", dest="report_out", type=Path, default=None, help="HTML file (default RUN/report.html)")
     r.add_argument("--videos", dest="report_videos", choices=("none", "failures", "all"), default="failures", help="which episode videos to link")
@@ -103,7 +103,7 @@ def resolve(args):
             except ValueError as e:  # UnknownNameError lists the known names
                 if args.perturbations:
                     raise UserError(str(e)) from None
-        perts = out or ["Default"]  # a preset's names that are not registered here are skipped
+        perts = out or [DEFAULT]  # a preset's names that are not registered here are skipped
     return proto, list(dict.fromkeys(tasks)), list(dict.fromkeys(perts))
 
 

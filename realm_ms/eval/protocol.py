@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-DEFAULT = "Default"
+from realm_ms.registration import DEFAULT  # noqa: F401  (re-exported for eval's modules)
 
 
 @dataclass(frozen=True)
@@ -58,24 +58,18 @@ class EpisodeKey:
 
 
 def available_perturbations() -> list[str]:
-    """Registered perturbation names (Default first); only Default until the perturbation pack exists."""
-    try:
-        from realm_ms import perturbations as pmod
-    except ImportError:
-        return [DEFAULT]
-    reg = getattr(pmod, "PERTURBATIONS", None)
-    names = list(reg.names()) if reg is not None and hasattr(reg, "names") else []
-    return [DEFAULT] + [n for n in names if n != DEFAULT]
+    """Registered perturbation names (Default first)."""
+    from realm_ms.perturbations import PERTURBATIONS
+
+    return [DEFAULT] + [n for n in PERTURBATIONS.names() if n != DEFAULT]
 
 
 def canonical_perturbation(name: str) -> str:
     """Registered spelling of a perturbation name or alias (e.g. a numeric id); raises ``ValueError``."""
     if name == DEFAULT or name.lower() == "default" or name == "0":
         return DEFAULT
-    try:
-        from realm_ms.perturbations import PERTURBATIONS
-    except ImportError:
-        raise ValueError(f"unknown perturbation {name!r}: the perturbation pack is not installed; only {DEFAULT!r} is available") from None
+    from realm_ms.perturbations import PERTURBATIONS
+
     return PERTURBATIONS.canonical(name)
 
 

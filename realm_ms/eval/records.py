@@ -132,7 +132,7 @@ def numbered_records(path: Path | str, problems: list[str] | None = None) -> lis
     return out
 
 
-def format_problems(problems: list[str], limit: int = 5) -> str:
+def format_problems(problems: list[str], limit: int = 20) -> str:
     """``problems`` for a warning: the first ``limit`` lines, then how many more."""
     shown = problems[:limit]
     more = f"\n  ... and {len(problems) - limit} more unreadable line(s)" if len(problems) > limit else ""
@@ -175,15 +175,10 @@ class RecordWriter:
 
 
 def _default(o):
-    try:
-        import numpy as np
+    import numpy as np
 
-        if isinstance(o, np.generic):
-            return o.item()
-        if isinstance(o, np.ndarray):
-            return o.tolist()
-    except ImportError:
-        pass
-    if hasattr(o, "tolist"):
+    if isinstance(o, np.generic):
+        return o.item()
+    if hasattr(o, "tolist"):  # arrays, tensors
         return o.tolist()
     return str(o)

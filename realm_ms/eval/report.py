@@ -137,19 +137,25 @@ def write_report(run_dir: Path, out: Path, videos: str = "failures", reference: 
     errors = [[str(e.get(k)) for k in ("task", "perturbation", "seed", "error")] for e in metrics["errors"]]
     policy = ", ".join(metrics["policies"]) or ", ".join(sorted({r.get("policy", "?") for r in records})) or "(no records)"
     ci = ["task", "episodes", "success k/n = rate [95% Wilson]", "progression [95% bootstrap]"]
+    def box(title: str, content: str) -> str:
+        return f"<section><h2>{title}</h2>{content}</section>"
+
+    tables = [
+        box("Per task", table(ci, task_rows)),
+        box("Per perturbation", table(["perturbation", *ci[1:], "delta to Default", "RMSD to Default"], pert_rows)),
+        box("Per factor group", table(["group", *ci[1:]], group_rows)),
+        box("Where episodes end", table(["outcome", "share of episodes"], fail)),
+        box("Time to stage (control steps)", table(["stage", "episodes that reached it", "mean", "median"], tts) if tts
+            else "<p class='note'>No episode reached any stage.</p>"),
+        box("REALM paper layout (mean progression)", table(header, rows)),
+    ]
     sections = [
         f"<h1>REALM evaluation: {esc(policy)}</h1>",
         protocol_block(run_protocol(run_dir, records), n_ok, n_err, n_unsup, run_dir),
         error_banner(n_err), headline(metrics),
         *imgs,
-        f"<h2>REALM paper layout (mean progression)</h2>{table(header, rows)}",
-        f"<h2>Per task</h2>{table(ci, task_rows)}",
-        f"<h2>Per perturbation</h2>{table(['perturbation', *ci[1:], 'delta to Default', 'RMSD to Default'], pert_rows)}",
-        f"<h2>Per factor group</h2>{table(['group', *ci[1:]], group_rows)}",
-        f"<h2>Where episodes end (share of episodes)</h2>{table(['outcome', 'share'], fail)}",
-        "<h2>Time to stage (control steps, over the episodes that reached it)</h2>"
-        + (table(['stage', 'episodes', 'mean', 'median'], tts) if tts else "<p class='note'>No episode reached any stage.</p>"),
         f"<h2>Episode videos</h2>{video_gallery(records, run_dir, out.parent, videos, videos_per_cell)}" if videos != "none" else "",
+        f"<div class='grid'>{''.join(tables)}</div>",
         f"<h2 id='errors'>Errors</h2>{table(['task', 'perturbation', 'seed', 'error'], errors)}" if errors else "",
         f"<p class='note'>Figures, <code>table.md</code>, <code>table.csv</code> and <code>metrics.json</code> are also in "
         f"<code>{esc(files.name)}/</code>.</p>",

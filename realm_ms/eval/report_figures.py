@@ -103,6 +103,7 @@ def failure_bars(metrics: dict):
         left += v
     ax.set_yticks(range(len(tasks)), [_short(t) for t in tasks])
     ax.set_xlabel("share of the task's episodes")
+    ax.invert_yaxis()  # first task on top, as in the heat-maps
     ax.set_xlim(0, 1)
     ax.legend(fontsize=8, bbox_to_anchor=(1.01, 1), loc="upper left")
     return fig

@@ -30,11 +30,12 @@ th{background:#f3f3f3} td.l,th.l{text-align:left}
 .figs{display:flex;flex-wrap:wrap;gap:10px 28px;align-items:flex-start}
 figure{margin:.6em 0;display:table} figure img{max-width:100%;border:1px solid #eee}
 figcaption{display:table-caption;caption-side:bottom;font-size:.86em;color:#444;padding-top:4px}
-.vids{display:grid;grid-template-columns:repeat(auto-fill,minmax(460px,1fr));gap:12px}
+.vids{display:grid;grid-template-columns:repeat(auto-fill,minmax(380px,1fr));gap:12px}
 .vid{border:1px solid #ddd;border-radius:6px;padding:6px;background:#fafafa;font-size:.85em}
 .vid video{width:100%;height:auto;background:#000;display:block}
 .tag{display:inline-block;padding:0 6px;border-radius:3px;font-weight:600}
 .tag.s{background:#d8f0d8;color:#145214} .tag.f{background:#f8dcdc;color:#7a1010} .tag.e{background:#eee;color:#555}
+.grid{display:flex;flex-wrap:wrap;gap:0 36px;align-items:flex-start} .grid h2{font-size:1.05em}
 .cmp td.v{font-variant-numeric:tabular-nums} .cmp th[colspan]{text-align:center}
 """
 
@@ -120,7 +121,8 @@ def run_protocol(run_dir: Path, records: list[dict]) -> dict[str, str]:
     tail = meta.get("success_tail")
     seeds_text = "not recorded"
     if seed is not None and episodes:
-        seeds_text = f"{seed} .. {seed + episodes - 1} (episode i: seed + i, the same under every perturbation)"
+        span = f"{seed} .. {seed + episodes - 1} (episode i: seed + i" if episodes > 1 else f"{seed} (episode 0: seed"
+        seeds_text = span + ", the same under every perturbation)"
     return {
         "policy": _mixed(policies),
         "protocol": f"the {meta.get('protocol', '?')} preset with the command's flags applied" if meta else "not recorded (no run.json)",

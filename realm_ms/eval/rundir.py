@@ -23,16 +23,19 @@ from realm_ms.eval.records import FINISHED, key_of, numbered_records
 from realm_ms.validate import InputError, check_output_path
 
 RUN_FILES = ("run.json", "records.jsonl", "metrics.json")
-DEFAULT_ACTION_SPACE = "droid_joint_pos"
+DEFAULT_ACTION_SPACE = "joint_position"  # DROID's; env keywords action_space / gripper_action_space
 
 
 def fingerprint(policy_spec: str, proto, cfg) -> dict:
     """What makes two records comparable (``cfg``: the run's ``RunConfig``)."""
     from realm_ms import __version__
-    from realm_ms.eval.runner import jsonable
+    from realm_ms.jsonable import jsonable
 
     env_config = jsonable(dict(cfg.env_kwargs or {}))
-    action_space = getattr(cfg, "action_space", None) or env_config.get("control_mode") or DEFAULT_ACTION_SPACE
+    space = env_config.pop("action_space", None) or DEFAULT_ACTION_SPACE
+    gripper = env_config.pop("gripper_action_space", None)
+    control = env_config.pop("control_mode", None)
+    action_space = ":".join(str(x) for x in (space, gripper) if x) + (f" ({control})" if control else "")
     return dict(policy=policy_spec, protocol=proto.name, max_steps=proto.max_steps, replan_every=proto.replan_every,
                 success_tail=proto.success_tail, camera_size=[cfg.obs.width, cfg.obs.height], action_space=action_space,
                 code_version=f"realm-ms {__version__}", env_config=env_config)

@@ -14,7 +14,6 @@ appends each finished record atomically, and shows a live progress bar.
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 import time
@@ -26,6 +25,7 @@ import numpy as np
 from realm_ms.eval.policies.policy import ObsRequest
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
 from realm_ms.eval.provenance import code_version
+from realm_ms.jsonable import jsonable
 
 VIDEO_CAMERAS = ("exterior_1", "wrist")
 
@@ -47,24 +47,6 @@ class RunConfig:
 
     def needs_rgb(self) -> bool:
         return bool(self.obs.cameras) or self.videos != "none"
-
-
-def jsonable(x):
-    """Tensors / arrays / numpy scalars inside nested dicts and lists -> plain JSON values."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if hasattr(x, "detach"):
-        x = x.detach().cpu().numpy()
-    if isinstance(x, np.ndarray):
-        x = x.tolist()
-        return x[0] if isinstance(x, list) and len(x) == 1 and not isinstance(x[0], list) else x
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
 
 
 def cell_config(task: str, perturbation: str, cfg: RunConfig):

@@ -12,13 +12,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from realm_ms.registration import DEFAULT
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser("export", help="write REALM episodes to a LeRobot v3.0 dataset (DROID features)",
                        description=__doc__.splitlines()[0])
     p.add_argument("--policy", default="expert", help="policy that acts (default: expert, the privileged scripted expert)")
     p.add_argument("--tasks", nargs="+", metavar="ID", help="REALM env ids, or 'all'")
-    p.add_argument("--perturbations", nargs="+", default=["Default"], metavar="NAME", help="perturbation names (default: Default)")
+    p.add_argument("--perturbations", nargs="+", default=[DEFAULT], metavar="NAME", help=f"perturbation names (default: {DEFAULT})")
     from realm_ms.validate import seed
 
     p.add_argument("--episodes", type=int, help="episodes per (task, perturbation), >= 1")

@@ -154,10 +154,8 @@ def validate_tasks(tasks: list[str], perturbations: list[str]) -> list[str]:
         if p in (DEFAULT_PERTURBATION, "0") or p.lower() == "default":
             out.append(DEFAULT_PERTURBATION)
             continue
-        try:
-            from realm_ms.perturbations import PerturbationSet
-        except ImportError:
-            raise ExportError(f"perturbation {p!r} requested but realm_ms.perturbations is not available") from None
+        from realm_ms.perturbations import PerturbationSet
+
         try:
             out.append(PerturbationSet.resolve(p).name)
         except ValueError as e:

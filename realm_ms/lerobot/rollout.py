@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from realm_ms.jsonable import jsonable
 from realm_ms.lerobot.features import DEFAULT_SIZE, obs_to_numpy
-
-DEFAULT_PERTURBATION = "Default"
+from realm_ms.registration import DEFAULT as DEFAULT_PERTURBATION
 
 
 @dataclass
@@ -121,16 +121,4 @@ def record_episode(env, policy, seed: int, on_frame: Callable[[dict, np.ndarray,
         if done:
             break
     return EpisodeResult(steps=steps, progression=best, success=success,
-                         instruction=instruction, perturbation=_jsonable(info.get("perturbation")))
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if hasattr(x, "detach"):
-        x = x.detach().cpu().numpy()
-    if isinstance(x, (np.ndarray, np.generic)):
-        return x.tolist()
-    return x
+                         instruction=instruction, perturbation=jsonable(info.get("perturbation")))

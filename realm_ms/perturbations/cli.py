@@ -22,7 +22,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     from realm_ms.rendering import SHADERS  # the one shader table
     from realm_ms.validate import integer, seed
 
-    sh.add_argument("--out", required=True, help="PNG path (with several tasks: one file per task, the id appended)")
+    sh.add_argument("--out", required=True, help="PNG (or JPEG) path (with several tasks: one file per task, the id appended)")
     sh.add_argument("--seed", type=seed(), default=0, help="seed of the perturbation draws, an integer in [0, 2**32) (default 0)")
     sh.add_argument("--width", type=integer(16, 4096), default=320, help="image width per tile in pixels, 16-4096 (default 320)")
     sh.add_argument("--height", type=integer(16, 4096), default=180, help="image height per tile in pixels, 16-4096 (default 180)")
@@ -76,11 +76,10 @@ def _sheet(args) -> int:
     if unknown:
         raise UserError(f"unknown task {unknown[0]!r}; known: {', '.join(sorted(TASKS))}")
     out = Path(args.out)
-    if out.suffix.lower() not in (".png", ".jpg", ".jpeg", ""):
+    check_output_path(out, "--out", "file", example="sheet.png")
+    if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise UserError(f"--out {out}: the sheet is an image; give a .png (or .jpg) path")
-    paths = [out if len(tasks) == 1 else out.with_name(f"{out.stem}_{task}{out.suffix or '.png'}") for task in tasks]
-    if len(tasks) == 1 and not out.suffix:
-        paths = [out.with_suffix(".png")]
+    paths = [out if len(tasks) == 1 else out.with_name(f"{out.stem}_{task}{out.suffix}") for task in tasks]
     for path in paths:  # all of them before the first (slow) render
         check_output_path(path, "--out", "file", example="sheet.png")
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -1,10 +1,10 @@
 """0 Default: the unperturbed task (the empty composition)."""
 
-from realm_ms.tasks.perturbation import Perturbation
+from realm_ms.tasks.perturbation import DEFAULT, Perturbation
 
 
 class Default(Perturbation):
     pid = 0
-    name = "Default"
+    name = DEFAULT
     acts_on = "nothing"
     ranges = "-"

@@ -141,7 +141,8 @@ def _synth(args) -> int:
     from realm_ms.sysid.effect_spec import parse_effects
 
     args.hidden = _joined(args.hidden, "--hidden")
-
+    if args.engine == "mujoco-native":
+        return _synth_native(args)
     if args.rate < args.control_hz:
         raise _user_error(f"--rate {args.rate:g} Hz is below the control rate --control-hz {args.control_hz:g} Hz")
     _check_outputs(args, dirs=("--out",))
@@ -153,6 +154,21 @@ def _synth(args) -> int:
                          control_hz=args.control_hz, engine=args.engine)
     print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {args.out} "
           f"(hidden: {info['hidden']}; truth in truth.yaml)")
+    return 0
+
+
+def _synth_native(args) -> int:
+    from realm_ms.sysid.reference_native import VARIANTS, NativeEffects, synth_native
+
+    _check_outputs(args, dirs=("--out",))
+    with _user_input("--hidden: "):
+        NativeEffects.parse(VARIANTS.get(args.hidden, args.hidden))
+    rate = 1000.0 if args.torque_only and args.rate == 15.0 else args.rate
+    info = synth_native(args.hidden, args.out, seed=args.seed, n_train=args.n_train, n_heldout=args.n_heldout,
+                        duration_s=args.duration, rate_hz=rate, noise_rad=args.noise, noise_nm=args.noise_torque,
+                        control_hz=args.control_hz, with_cmd=not args.torque_only)
+    print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {args.out} at {rate:g} Hz "
+          f"(MuJoCo-native: {info['effects'] or 'none'}; t, q, qd, tau" + ("" if args.torque_only else ", q_cmd") + ")")
     return 0
 
 
@@ -343,9 +359,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--n-heldout", type=integer(1), default=3, help="held-out trajectories, integer >= 1 (default 3)")
     s.add_argument("--duration", type=positive("s"), default=10.0,
                    help="seconds per trajectory, >= 2 s (default 10)")
-    s.add_argument("--engine", choices=("physx", "mujoco"), default="physx",
+    s.add_argument("--engine", choices=("physx", "mujoco", "mujoco-native"), default="physx",
                    help="physx: the replay simulator itself; mujoco: the independent reference (same URDF and "
-                        "law at 1 kHz in MuJoCo; needs `pip install mujoco`)")
+                        "law at 1 kHz in MuJoCo; needs `pip install mujoco`); mujoco-native: that law on a plant "
+                        "whose effects are MuJoCo's own (--hidden frictionloss=0.3,payload_mass=0.8,"
+                        "payload_com_x=0.12,... or a variant name: none, frictionloss, damping, armature, payload_com, "
+                        "link4_mass, springs, frictionloss+payload_com), with a joint-torque sensor (tau)")
+    s.add_argument("--torque-only", action="store_true",
+                   help="mujoco-native: write t, q, qd, tau without q_cmd (a torque log; default rate 1 kHz)")
+    s.add_argument("--noise-torque", type=non_negative("N·m"), default=0.02,
+                   help="mujoco-native: torque-sensor noise std in N·m, >= 0 (default 0.02)")
     s.set_defaults(func=_synth)
 
     s = sub.add_parser("compare", help="replay DATA in simulation: per-joint error and noise floor")

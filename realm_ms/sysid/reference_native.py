@@ -13,7 +13,8 @@ friction is our smooth law, its payload sits where ours does. Here every effect 
 | ``link_scale`` | ``body_mass``, ``body_inertia`` | link k's mass and inertia x (1 + s) (no library effect in position space) |
 
 The controller is the independent Polymetis law of ``MujocoReference`` (from MuJoCo's own model,
-1 kHz, 4 plant substeps). ``rollout_torque`` also returns the joint-torque sensor output: the
+1 kHz, 4 plant substeps), evaluated on the *nominal* MuJoCo model at the plant's state: like the
+real controller it does not know the payload or a link's true mass. ``rollout_torque`` also returns the joint-torque sensor output: the
 motor torque the law applied during each tick (what a Franka's τ_J would read minus the
 friction the sensor sits behind, i.e. the torque that drives the rigid body and the joint
 effects).
@@ -121,6 +122,20 @@ class NativeReference(MujocoReference):
         super().__init__(config or MujocoConfig())
         self.native = effects or NativeEffects()
         self._native_model = build_native_model(self.native, self.config)
+        # the controller believes the nominal robot: its Jacobian and C q̇ + g come from the nominal
+        # model at the plant's state (a payload or heavier link is *not* compensated)
+        import mujoco
+
+        self._nominal = build_native_model(NativeEffects(), self.config)
+        self._nominal_data = mujoco.MjData(self._nominal)
+
+    def _law(self, m, d, q_target, jacp, jacr):
+        import mujoco
+
+        nd = self._nominal_data
+        nd.qpos[:], nd.qvel[:] = d.qpos, d.qvel
+        mujoco.mj_forward(self._nominal, nd)
+        return super()._law(self._nominal, nd, q_target, jacp, jacr)
 
     def _model(self, i: int):
         import copy
@@ -183,14 +198,14 @@ def synth_native(effects: str, out, seed: int = 0, n_train: int = 7, n_heldout: 
     rng = np.random.default_rng(seed + 1000)
     law_hz = ref.config.law_hz
     out = Path(out)
-    every = max(1, int(round(law_hz / rate_hz)))
     for i, c in enumerate(cmds):
         ticks = int(round((len(c) - 1) / control_hz * law_hz))
         k = np.minimum((np.arange(ticks) / law_hz * control_hz + 1e-9).astype(int), len(c) - 1)
         q, qd, tau = ref.rollout_torque(c[0], c[k])
         t = np.arange(ticks + 1) / law_hz
         q_cmd = c[np.minimum(k.tolist() + [k[-1]], len(c) - 1)]
-        sl = slice(None, None, every)
+        # samples at the ticks nearest to k / rate_hz: jitter <= half a tick, no drift off the command grid
+        sl = np.unique(np.round(np.arange(0, t[-1] + 1e-9, 1.0 / rate_hz) * law_hz).astype(int))
         split = "train" if i < n_train else "heldout"
         write_npz(out / split / f"traj_{i:03d}.npz", Trajectory(
             f"traj_{i:03d}", t[sl], q[sl] + rng.normal(0, noise_rad, q[sl].shape),

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from realm_ms.agents.control import DroidControlConfig, ImpedanceGains, JointPhysics
+from realm_ms.jsonable import jsonable
 from realm_ms.rendering import CameraSettings
 from realm_ms.tasks.progression import Thresholds
 
@@ -106,7 +107,7 @@ class RealmEnvConfig:
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
         d["perturbation"] = list(self.perturbation) if isinstance(self.perturbation, tuple) else self.perturbation
-        return _jsonable(d)
+        return jsonable(d)
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "RealmEnvConfig":
@@ -214,13 +215,3 @@ def _control_fields(d: dict) -> dict:
         if isinstance(v, list):
             d[k] = tuple(v)
     return d
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, float) and not math.isfinite(x):
-        return str(x)
-    return x

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from realm_ms.tasks.perturbation import PERTURBATIONS, DrawContext, Perturbation
+from realm_ms.tasks.perturbation import DEFAULT, PERTURBATIONS, DrawContext, Perturbation
 from realm_ms.tasks.task_spec import TaskSpec
 
 PerturbationLike = str | int | Perturbation | Sequence
@@ -35,7 +35,7 @@ class PerturbationSet:
         """``None``/``"Default"``/``0``, a name, an id, a ``Perturbation`` or a list of those."""
         if isinstance(spec, PerturbationSet):
             return cls(spec.items)
-        if spec is None or (isinstance(spec, (str, int)) and str(spec).lower() in ("default", "0")):
+        if spec is None or (isinstance(spec, (str, int)) and str(spec).lower() in (DEFAULT.lower(), "0")):
             return cls()  # the empty composition
         if isinstance(spec, (str, int, Perturbation)) or not isinstance(spec, Sequence):
             spec = [spec]
@@ -51,7 +51,7 @@ class PerturbationSet:
 
     @property
     def names(self) -> list[str]:
-        return [p.name for p in self.items] or ["Default"]
+        return [p.name for p in self.items] or [DEFAULT]
 
     @property
     def name(self) -> str:

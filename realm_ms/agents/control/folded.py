@@ -10,7 +10,7 @@ import numpy as np
 import torch
 
 from realm_ms.agents.control.backend import NumpyBackend
-from realm_ms.agents.control.law import FREE_MOTION_TOLERANCE, friction, land, law_ticks, tick_count
+from realm_ms.agents.control.law import friction, in_contact, land, law_ticks, tick_count
 from realm_ms.agents.control.rates import rate_for
 
 # the driver's state tensors the folded step keeps in one float32 buffer, in this order
@@ -111,9 +111,7 @@ class FoldedExact:
             if sat.any():  # the law saturates within the step: its ticks with the clipped torque
                 self._saturated_ticks(y, np.nonzero(sat)[0], err, qd, qd_held, ext, t, q, dt)
             clamped = np.minimum(np.maximum(tau, -self.lim), self.lim)
-            limited = (np.abs(clamped - tau) >= 1e-4).any(-1)
-            free = (np.abs(qd_held - state[:, 4 * n :]) * dt <= FREE_MOTION_TOLERANCE).all(-1)
-            clip = limited & ~free  # in contact: clipped, no correction (see ``Exact.torque``)
+            clip = in_contact(be, tau, clamped, qd_held, state[:, 4 * n :], dt)  # clipped, no correction
             y[clip, 4 * n : 5 * n] = 0.0
         applied = tau if clip is None or not clip.any() else np.where(clip[:, None], clamped, tau)
         fric = friction(be, self.neg_friction, qd, drv.joint_physics.friction_velocity, self.inertia_lower_bound, dt)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import torch
 
 from realm_ms.agents.actuation import ControlState
-from realm_ms.agents.control.law import FREE_MOTION_TOLERANCE, feedforward, friction, land, law_ticks, terms_at, tick_count
+from realm_ms.agents.control.law import feedforward, friction, in_contact, land, law_ticks, terms_at, tick_count
 
 
 class Explicit:
@@ -88,15 +88,8 @@ class Exact(Explicit):
         tau, v_end, v_avg, f_step = self._step(drv, q_m - q_t, qd_m, qd_held + (qd_m - qd), t, bias, ext, dt, within)
         tau = tau + bias
         clamped = be.clip(tau, drv.neg_effort_limits, drv.effort_limits)
-        # The exact step's torque is the law's motion over the step folded into one PhysX step, not
-        # the motor's instantaneous torque (the law's ticks are clipped to the limits inside the
-        # prediction): at a new target it can exceed the limit while the 1 kHz motor does not. It is
-        # applied in full while the arm moves as predicted; in contact it is clipped, the prediction
-        # no longer holds there and its velocity correction is dropped. (Tested before the actuator
-        # stages, whose additions enter the next step as plant torque.)
-        limited = ((clamped - tau).abs() >= 1e-4).any(-1, keepdim=True)
-        free = ((qd_held - drv.predicted_velocity).abs() * dt <= FREE_MOTION_TOLERANCE).all(-1, keepdim=True)
-        clip = limited & ~free
+        # (tested before the actuator stages, whose additions enter the next step as plant torque)
+        clip = in_contact(be, tau, clamped, qd_held, drv.predicted_velocity, dt)[:, None]
         drv.velocity_correction = torch.where(clip, 0.0, v_end - v_avg)
         drv.predicted_velocity = v_avg
         excess = torch.where(clip, 0.0, tau - clamped)  # the step's torque beyond the limit

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 # rad: PhysX ended the last step where the exact step put it (its velocity off the predicted one by
 # at most this over a step): the arm moves freely, and the step's torque may exceed the motor limit
-# (see ``integrators.Exact``). Measured in free motion on 4 s excitation logs, nominal and with every
+# (``in_contact``). Measured in free motion on 4 s excitation logs, nominal and with every
 # sysid effect: median 0.6-3e-5, max 2.1e-4; a joint blocked by contact misses by the step's whole
 # motion (estimated ½ a h² at the limit torque: ~1e-3 rad on the shoulder, ~1e-2 on the wrist).
 FREE_MOTION_TOLERANCE = 5e-4
@@ -101,6 +101,18 @@ def land(x1, err, qd_held, mass, ext, dt: float):
     n = err.shape[1]
     v_avg = (x1[:, :n] - err) / dt
     return (mass @ ((v_avg - qd_held) / dt)[..., None])[..., 0] - ext, x1[:, n:], v_avg
+
+
+def in_contact(be, tau, clamped, qd_held, predicted_velocity, dt: float):
+    """Rows whose exact-step torque exceeds the motor limit while the arm did not move as the last
+    step predicted. The exact step's torque is the law's motion over the step folded into one PhysX
+    step, not the motor's instantaneous torque (the law's ticks are clipped to the limits inside the
+    prediction): at a new target it can exceed the limit while the 1 kHz motor does not. It is
+    applied in full while the arm moves as predicted; in contact it is clipped, the prediction no
+    longer holds there and its velocity correction is dropped."""
+    limited = (be.abs(clamped - tau) >= 1e-4).any(-1)
+    free = (be.abs(qd_held - predicted_velocity) * dt <= FREE_MOTION_TOLERANCE).all(-1)
+    return limited & ~free
 
 
 def friction(be, neg_friction, qd, velocity: float, inertia_lower_bound, dt: float):

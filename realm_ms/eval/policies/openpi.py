@@ -35,7 +35,7 @@ import time
 import numpy as np
 
 from realm_ms.eval.policies import POLICIES
-from realm_ms.eval.policies.policy import ObsRequest, Policy, PolicyInput, PolicyOutput
+from realm_ms.eval.policies.policy import CAMERAS, ObsRequest, Policy, PolicyInput, PolicyOutput
 from realm_ms.eval.policies.openpi_wire import packb, resize_with_pad, unpackb
 
 FORMATS = ("pi0", "groot")
@@ -131,7 +131,7 @@ class OpenPIPolicy(Policy):
         return next((c.metadata for c in self.conns if c.metadata is not None), {})
 
     def obs_request(self) -> ObsRequest:
-        cams = ("exterior_1", "wrist") if self.fmt == "pi0" else ("exterior_1", "exterior_2", "wrist")
+        cams = ("exterior_1", "wrist") if self.fmt == "pi0" else CAMERAS
         return ObsRequest(cams, 320, 180)
 
     def spec(self) -> str:

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-CAMERAS = ("exterior_1", "exterior_2", "wrist")  # the env's camera uids
+from realm_ms.rendering import CAMERA_UIDS as CAMERAS  # the env's camera uids
 
 
 @dataclass
