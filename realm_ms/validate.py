@@ -204,3 +204,38 @@ def seed() -> Callable[[str], int]:
 def finite(unit: str = "") -> Callable[[str], float]:
     """argparse type: any finite number."""
     return _argtype(lambda s: check_number(s, "value", unit), "number")
+
+
+# ---------------------------------------------------------------------------- repeated flags
+class _StoreOnce(argparse._StoreAction):
+    """A single-valued flag given twice is an error (not the last one silently)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        seen = namespace.__dict__.setdefault("_flags_given", {})
+        if self.dest in seen:
+            old, new = (repr(os.fspath(v)) if isinstance(v, os.PathLike) else repr(v) for v in (seen[self.dest], values))
+            parser.error(f"argument {'/'.join(self.option_strings)}: given twice ({old}, then {new}); give it once")
+        seen[self.dest] = values
+        super().__call__(parser, namespace, values, option_string)
+
+
+class _StoreList(argparse._StoreAction):
+    """A list flag (``nargs="+"``) given twice accumulates: ``--tasks A --tasks B`` is ``[A, B]``."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        seen = namespace.__dict__.setdefault("_flags_given", {})
+        values = (list(seen[self.dest]) if self.dest in seen else []) + list(values)
+        seen[self.dest] = values
+        super().__call__(parser, namespace, values, option_string)
+
+
+def forbid_repeats(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Make every single-valued option of ``parser`` (and of its sub-parsers) an error when given
+    twice; list options (``nargs="+"``/``"*"``) accumulate, as ``append`` options do."""
+    for action in parser._actions:
+        if type(action) is argparse._StoreAction and action.option_strings:
+            action.__class__ = _StoreOnce if action.nargs in (None, "?") else _StoreList
+        elif isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                forbid_repeats(sub)
+    return parser

@@ -232,3 +232,15 @@ def test_expert_drives_cartesian_position(envs):
 
     res = run_episode(envs["cartesian_position"], seed=0, max_steps=200)
     assert res["success"], res
+
+
+def test_eval_flag_reaches_the_env_keywords_with_clear_errors():
+    from realm_ms.errors import UserError
+    from realm_ms.eval.policies import make_policy, policy_action_space
+
+    zero = make_policy("zero")
+    assert policy_action_space(zero, {"action_space": "cartesian_velocity:position"}) == {
+        "action_space": "cartesian_velocity", "gripper_action_space": "position"}
+    assert policy_action_space(zero, {}) == {}
+    with pytest.raises(UserError, match="--action-space: unknown action_space 'nope'"):
+        policy_action_space(zero, {"action_space": "nope"})

@@ -237,3 +237,29 @@ def test_an_arm_that_does_not_move_as_predicted_gets_at_most_the_motor_limit(num
         peak = torch.maximum(peak, drv.torque(q0, torch.zeros_like(q0), 1 / 120)[0].abs())
     assert (peak <= limits + 1e-3).all(), peak
     assert (peak >= limits - 1e-3).any(), "the step should saturate the motor"
+
+
+def test_the_law_is_one_code_on_both_backends(model64):
+    """``control/law.py`` is written once against an array backend: on float64 torch and on numpy
+    it gives the same stiffness, damping, feed-forward, transition, gravity Jacobian and path plan."""
+    from realm_ms.agents.control import law
+    from realm_ms.agents.control.backend import NumpyBackend, TorchBackend
+    from realm_ms.agents.control.presets import GAIN_PRESETS, BatchedGains
+
+    cfg = DroidControlConfig()
+    rng = np.random.default_rng(1)
+    q, qd = np.asarray(HOME)[None] + rng.normal(0, 0.2, (3, 7)), rng.normal(0, 0.5, (3, 7))
+    q_t, ext = q + rng.normal(0, 0.05, (3, 7)), rng.normal(0, 0.3, (3, 7))
+    g64 = BatchedGains.from_gains(GAIN_PRESETS["polymetis"], 3, "cpu", torch.float64)
+    out = {}
+    for be, conv, gains in ((TorchBackend(model64), torch.as_tensor, g64),
+                            (NumpyBackend(model64), np.asarray, g64.map(lambda g: g.numpy()))):
+        arm = be.diag(conv(np.full(7, 0.1)))
+        terms = law.terms_at(be, cfg, conv(q), conv(qd), gains, arm, None, 1 / 120)
+        plan = law.plan_path(be, cfg, conv(q), conv(qd), conv(q_t), gains, arm, None, conv(ext), 1 / 120, 4)
+        out[be.name] = {**{f"terms.{k}": v for k, v in terms.items()}, **{f"plan.{k}": v for k, v in plan.items()},
+                        "dg": law.gravity_jacobian(be, cfg, conv(q))}
+    assert out["torch"].keys() == out["numpy"].keys()
+    for key, t in out["torch"].items():
+        assert np.allclose(np.asarray(t), out["numpy"][key], rtol=1e-9, atol=1e-9), key
+    assert np.abs(out["numpy"]["terms.phi"]).max() > 0.5 and np.abs(out["numpy"]["dg"]).max() > 1.0  # not trivially zero

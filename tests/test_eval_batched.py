@@ -29,6 +29,7 @@ def _records(path):
     out = {}
     for r in map(json.loads, path.read_text().splitlines()):
         r.pop("wall_s")
+        r["config"].pop("sim_backend")  # inline asks for "auto", batched names "physx_cpu": the same CPU physics
         if "video" in r:
             r["video"] = Path(r["video"]).read_bytes()
         out[r["task"], r["perturbation"], r["seed"]] = r

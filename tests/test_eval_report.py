@@ -2,11 +2,14 @@
 their numbers, every page states the protocol and counts error records, labels are honest, no empty
 delta plot, inline videos chosen by a rule, and videos written at their own size (never stretched)."""
 
+import base64
+import io
 import json
 import logging
 import re
 import warnings
 
+import imageio.v2 as imageio
 import numpy as np
 import pytest
 
@@ -92,6 +95,9 @@ def test_successful_episode_is_never_labelled_stalled(tmp_path):
     assert "succeeded" in cards[0] and "seed 1234" in cards[0] and "stalled at GRASP" in cards[1]
     # the stored path does not resolve from the report's folder: found under RUN/videos/ by name
     assert 'src="../run/videos/' in cards[0]
+    # the still is the episode's last frame (frames are flat grey 0, 40, 80)
+    poster = re.search(r'poster="data:image/png;base64,([^"]+)"', cards[0]).group(1)
+    assert abs(imageio.imread(io.BytesIO(base64.b64decode(poster))).mean() - 80) < 3
 
 
 def test_no_empty_delta_plot(tmp_path):
@@ -116,8 +122,6 @@ def test_videos_are_the_first_failures_by_seed_in_each_cell(tmp_path):
 
 @pytest.mark.parametrize("size", [(90, 320), (91, 161)])
 def test_videos_keep_their_size_and_print_no_resize_warning(tmp_path, caplog, size):
-    import imageio.v2 as imageio
-
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with caplog.at_level(logging.WARNING):
@@ -144,3 +148,7 @@ def test_demo_index_compares_both_policies_and_shows_the_learned_policys_failure
     assert len(tiny) == 1 and not tiny[0]["success"] and tiny[0]["video"]
     report = (tmp_path / "lerobot_tiny" / "report.html").read_text()
     assert report.count("<video controls") == 1 and "stalled at REACH" in report
+    # the header reads the protocol from what this run wrote (run.json, records)
+    header = report[:report.index("<h2")]
+    for text in ("24 control steps (1.6 s at 15 Hz)", "160x90 per camera", "joint_position", "realm-ms ", "0 error records"):
+        assert text in header, text

@@ -120,3 +120,25 @@ def test_bad_input_is_a_clear_error(argv, msg, tmp_path, data, capsys):
         np.savez(tmp_path / "deg" / f"d{i}.npz", t=t, q=q, q_cmd=q)
     code, out, err = run(capsys, *[a.format(tmp=tmp_path, data=data) for a in argv])
     assert code == 2 and msg in err and "Traceback" not in err
+
+
+def test_auto_json_schema_and_report(data, capsys, tmp_path):
+    """`auto`: the documented JSON (unit, nominal, steps, final with verdict, friction curve)."""
+    code, out, err = run(capsys, "auto", data, "--workers", 1, "--max-steps", 1, "--generations", 2, "--no-progress",
+                         "--out", tmp_path / "M.yaml", "--json", tmp_path / "a.json")
+    assert code == 0, err
+    a = json.loads((tmp_path / "a.json").read_text())
+    assert a["unit"] == "rad" and set(a["final"]) == {"heldout_rmse", "noise_floor", "verdict"}
+    assert a["final"]["verdict"] in ("at_floor", "partially_explained", "unexplained")
+    assert [s["effect"] for s in a["steps"]] == ["latency"]
+    st = a["steps"][0]
+    assert set(st) == {"effect", "params", "heldout_rmse"} and "latency.delay" in st["params"]
+    assert st["heldout_rmse"] < 0.5 * a["nominal_heldout_rmse"] and a["final"]["heldout_rmse"] == st["heldout_rmse"]
+    fc = a["friction_curve"]
+    assert len(fc["qd"]) == len(fc["tau"]) and all(len(r) == 7 for r in fc["tau"])
+    assert "auto" in out or "final" in out
+    code, out, err = run(capsys, "report", data, "--model", tmp_path / "M.yaml", "--auto", tmp_path / "a.json",
+                         "--out", tmp_path / "r.html", "--workers", 1, "--no-waterfall")
+    assert code == 0, err
+    html = (tmp_path / "r.html").read_text()
+    assert "Auto: nominal" in html and "Friction curves" in html and "section failed" not in html

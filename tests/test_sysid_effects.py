@@ -9,7 +9,7 @@ from realm_ms.sysid.effect_spec import parse_effects
 
 NAMES = ["coulomb_friction", "viscous_damping", "stribeck_friction", "armature", "payload", "gravity_comp_error",
          "latency", "gain_mismatch", "torque_limit", "backlash", "encoder_bias"]
-UNITS = {"N·m", "N·m·s/rad", "kg·m²", "kg", "s", "rad", "rad/s", "N·m/s", "1"}
+UNITS = {"N·m", "N·m·s/rad", "kg·m²", "kg", "m", "s", "rad", "rad/s", "N·m/s", "1"}
 
 
 def test_registry_has_exactly_the_issue_names():

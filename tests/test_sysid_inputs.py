@@ -89,3 +89,30 @@ def test_encoder_bias_sign():
     biased = sim.rollout(q0, np.zeros_like(q0), hold, [make_effect("encoder_bias", {"bias7": 0.005, "bias1": -0.004})])[0, -1]
     assert biased[6] - ref[6] == pytest.approx(-0.005, abs=5e-4)
     assert biased[0] - ref[0] == pytest.approx(0.004, abs=5e-4)
+
+
+def test_torque_logs_without_q_cmd_load_for_torque_space(tmp_path):
+    """npz with t, q, tau (no q_cmd) and a LeRobot dataset with an effort feature and no action."""
+    from realm_ms.sysid.data_io import load_dir, read_lerobot
+
+    t = np.arange(1200) / 1000.0
+    q = POSE[None].repeat(1200, 0)
+    (tmp_path / "npz").mkdir()
+    np.savez(tmp_path / "npz" / "a.npz", t=t, q=q, tau=np.zeros((1200, 7)))
+    (tr,) = load_dir(tmp_path / "npz")
+    assert tr.q_cmd is None and tr.tau.shape == (1200, 7)
+
+    pytest.importorskip("lerobot")
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    feats = {"observation.state": {"dtype": "float32", "shape": (7,), "names": None},
+             "observation.effort": {"dtype": "float32", "shape": (7,), "names": None}}
+    ds = LeRobotDataset.create(repo_id="local/torque_log", fps=100, features=feats, root=tmp_path / "ds", use_videos=False)
+    for i in range(150):
+        ds.add_frame({"observation.state": (POSE + 0.001 * i).astype(np.float32),
+                      "observation.effort": np.full(7, 0.5, np.float32), "task": "log"})
+    ds.save_episode()
+    ds.finalize()
+    (tr,) = read_lerobot(tmp_path / "ds")
+    assert tr.q_cmd is None and tr.tau.shape == (150, 7) and np.allclose(tr.tau, 0.5)
+    assert len(load_dir(tmp_path / "ds")) == 1

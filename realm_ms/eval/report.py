@@ -136,6 +136,7 @@ def write_report(run_dir: Path, out: Path, videos: str = "failures", reference: 
     fail = [["succeeded" if s == "DONE" else f"stalled at {s}", f"{v:.2f}"] for s, v in metrics["failure_stages"].items()]
     errors = [[str(e.get(k)) for k in ("task", "perturbation", "seed", "error")] for e in metrics["errors"]]
     policy = ", ".join(metrics["policies"]) or ", ".join(sorted({r.get("policy", "?") for r in records})) or "(no records)"
+    policy += "".join(sorted({f" [{r['action_space']}]" for r in records if r.get("action_space", "joint_position:position") != "joint_position:position"}))
     ci = ["task", "episodes", "success k/n = rate [95% Wilson]", "progression [95% bootstrap]"]
     def box(title: str, content: str) -> str:
         return f"<section><h2>{title}</h2>{content}</section>"

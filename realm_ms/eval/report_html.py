@@ -70,23 +70,26 @@ def short(task: str) -> str:
 
 
 # ------------------------------------------------------------------------------------ protocol
+def _get(d: dict, key: str):
+    """``d["a"]["b"]`` for ``key="a.b"``; None where a level is missing."""
+    for part in key.split("."):
+        d = d.get(part) if isinstance(d, dict) else None
+    return d
+
+
 def _values(records: list[dict], *keys: str) -> list:
-    """Distinct values of the first of ``keys`` each record has (``fingerprint.KEY`` looks inside
-    the record's run fingerprint)."""
+    """Distinct values of the first of ``keys`` (dotted paths, e.g. ``fingerprint.camera_size``)
+    each record has."""
     seen = []
     for r in records:
-        for key in keys:
-            head, _, sub = key.partition(".")
-            v = (r.get(head) or {}).get(sub) if sub else r.get(head)
-            if v is not None:
-                if v not in seen:
-                    seen.append(v)
-                break
+        v = next((v for v in (_get(r, k) for k in keys) if v is not None), None)
+        if v is not None and v not in seen:
+            seen.append(v)
     return seen
 
 
 def _meta(meta: dict, *keys: str) -> list:
-    return next(([meta[k]] for k in keys if meta.get(k) is not None), [])
+    return next(([v] for v in (_get(meta, k) for k in keys) if v is not None), [])
 
 
 def _mixed(vals: list[str]) -> str:
@@ -113,11 +116,13 @@ def run_protocol(run_dir: Path, records: list[dict]) -> dict[str, str]:
     steps = _values(records, "max_steps") or _meta(meta, "max_steps")
     replan = _values(records, "replan_every") or _meta(meta, "replan_every")
     cams = [f"{c[0]}x{c[1]}" if isinstance(c, list) else str(c)
-            for c in _values(records, "fingerprint.camera_size", "camera") or _meta(meta, "camera_size")]
-    spaces = _values(records, "action_space", "fingerprint.action_space", "control_mode") or _meta(meta, "action_space", "control_mode")
-    versions = _values(records, "code_version", "fingerprint.code_version") or _meta(meta, "code_version")
+            for c in _values(records, "fingerprint.camera_size", "camera") or _meta(meta, "fingerprint.camera_size", "camera_size")]
+    shaders = _values(records, "config.cameras.shader")
+    spaces = (_values(records, "action_space", "fingerprint.action_space", "control_mode")
+              or _meta(meta, "fingerprint.action_space", "action_space", "control_mode"))
+    versions = _values(records, "code_version", "fingerprint.code_version") or _meta(meta, "fingerprint.code_version", "code_version")
     policies = _values(records, "policy") or _meta(meta, "policy")
-    horizon = [f"{s} control steps ({s / CONTROL_HZ:.0f} s at {CONTROL_HZ} Hz)" for s in steps]
+    horizon = [f"{s} control steps ({s / CONTROL_HZ:.3g} s at {CONTROL_HZ} Hz)" for s in steps]
     tail = meta.get("success_tail")
     seeds_text = "not recorded"
     if seed is not None and episodes:
@@ -133,7 +138,8 @@ def run_protocol(run_dir: Path, records: list[dict]) -> dict[str, str]:
         "horizon": _mixed(horizon) + (f"; ends {tail} steps after success" if tail else ""),
         "action space": _mixed([describe_action_space(m) for m in spaces])
         + (f"; re-planned every {replan[0]} steps" if len(replan) == 1 else ""),
-        "camera": _mixed(cams) + (" per camera (the policy's frames and the videos)" if cams else ""),
+        "camera": _mixed(cams) + (" per camera (the policy's frames and the videos)" if cams else "")
+        + (f"; {' / '.join(shaders)} shader" if shaders else ""),
         "code version": _mixed(versions),
     }
 
@@ -214,9 +220,13 @@ def _poster(path: Path) -> str:
         import imageio.v2 as imageio
 
         reader = imageio.get_reader(path)
-        frame = None
-        for frame in reader:
-            pass
+        try:  # seek straight to the end (constant time); decode through the file if seeking fails
+            meta = reader.get_meta_data()
+            frame = reader.get_data(max(0, int(round(meta["duration"] * meta["fps"])) - 1))
+        except (IndexError, KeyError, TypeError, ValueError):
+            frame = None
+            for frame in imageio.get_reader(path):
+                pass
         reader.close()
         if frame is None:
             return ""

@@ -80,7 +80,7 @@ def read_paired(path: Path, percent: bool = False) -> dict[str, list[tuple[str, 
     """task -> [(policy, real, sim)] as rates in [0, 1] (``percent``: the file holds 0-100);
     raises ValueError with a one-line reason naming the line on bad input."""
     try:
-        with open(path, newline="", encoding="utf-8") as f:
+        with open(path, newline="", encoding="utf-8-sig") as f:  # -sig: a spreadsheet's byte-order mark is not part of "policy"
             return _read_rows(path, csv.DictReader(f), percent)
     except UnicodeDecodeError:
         raise ValueError(f"{path}: not a UTF-8 text (CSV) file") from None
@@ -180,6 +180,9 @@ def add_parser(sub) -> None:
     p.add_argument("paired", type=Path, help="CSV with columns policy,task,real,sim")
     p.add_argument("--json", type=Path, default=None, help="also write the result as JSON here (a file path)")
     p.add_argument("--percent", action="store_true", help="real/sim are percentages (0-100); default: rates in [0, 1]")
+    from realm_ms.validate import forbid_repeats
+
+    forbid_repeats(p)
     p.set_defaults(func=run)
 
 

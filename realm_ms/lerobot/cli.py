@@ -21,7 +21,7 @@ def add_parser(sub) -> None:
     p.add_argument("--policy", default="expert", help="policy that acts (default: expert, the privileged scripted expert)")
     p.add_argument("--tasks", nargs="+", metavar="ID", help="REALM env ids, or 'all'")
     p.add_argument("--perturbations", nargs="+", default=[DEFAULT], metavar="NAME", help=f"perturbation names (default: {DEFAULT})")
-    from realm_ms.validate import seed
+    from realm_ms.validate import forbid_repeats, seed
 
     p.add_argument("--episodes", type=int, help="episodes per (task, perturbation), >= 1")
     p.add_argument("--seed", type=seed(), default=0, help="episode k of each (task, perturbation) uses seed + k; in [0, 2**32)")
@@ -39,6 +39,7 @@ def add_parser(sub) -> None:
                    help="re-simulate the episodes of a `realm eval` run (its records.jsonl) instead of --tasks")
     p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes, >= 1 (resume granularity)")
     p.set_defaults(func=run)
+    forbid_repeats(p)  # a single-valued flag given twice is an error; --tasks/--perturbations accumulate
 
 
 def run(args) -> int:
@@ -52,6 +53,13 @@ def run(args) -> int:
         raise UserError("--from-eval takes its tasks from the run's records; drop --tasks")
     if args.from_eval is not None and args.episodes is not None:
         raise UserError("--from-eval exports one episode per record of the run; drop --episodes")
+    if args.from_eval is None:  # the policy is known before a dataset is created
+        from realm_ms.eval.cli import check_policy_spec
+        from realm_ms.eval.policies import policy_names
+
+        if args.policy.partition(":")[0] not in policy_names():
+            raise UserError(f"unknown policy {args.policy!r}; known: {', '.join(policy_names())}")
+        check_policy_spec(args.policy)
     tasks = args.tasks or []
     if "all" in tasks and len(tasks) > 1:
         raise UserError("--tasks all stands alone; drop the other task ids")

@@ -129,7 +129,7 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
         if not kept:
             continue
         model, current = f.model, after
-        if current <= cfg.diagnose.found_factor * floor:
+        if current <= cfg.diagnose.found_factor * floor or len([s for s in steps if s.kept]) >= cfg.max_steps:
             break
         bar.set_description("auto: diagnosing")
         d = diagnose(train, heldout, model, cfg.diagnose, evaluator, log=quiet)

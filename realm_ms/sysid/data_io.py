@@ -121,7 +121,9 @@ def read_lerobot(root: Path) -> list[Trajectory]:
     if not version.startswith("v3"):
         raise DataError(f"{root}: LeRobot dataset version {version}; only v3.0 is supported (convert with lerobot's v2.1->v3.0 script)")
     feats = info["features"]
-    for key in ("observation.state", "action"):
+    # a torque log (an effort/torque feature, no joint-position `action`) is worked on in torque space
+    torque_log = "action" not in feats and _lerobot_feature(info, ("effort", "torque")) is not None
+    for key in ("observation.state",) + (() if torque_log else ("action",)):
         if key not in feats:
             raise DataError(f"{root}: LeRobot dataset lacks `{key}`; DROID convention: observation.state = 7 joint positions + gripper, action = 7 joint targets + gripper")
         if _shape(feats[key])[:1] not in ([7], [8]) or len(_shape(feats[key])) != 1:
@@ -145,7 +147,7 @@ def read_lerobot(root: Path) -> list[Trajectory]:
         except Exception as e:  # noqa: BLE001 - pyarrow raises many types for damaged files
             raise DataError(f"{f}: not a readable parquet file ({type(e).__name__}); the file is damaged or truncated") from None
     df = pd.concat(frames, ignore_index=True)
-    for col in ("episode_index", "observation.state", "action"):
+    for col in ("episode_index", "observation.state") + (() if torque_log else ("action",)):
         if col not in df.columns:
             raise DataError(f"{files[0].parent}: the parquet files have no `{col}` column (columns: {', '.join(map(str, df.columns))})")
     vel, eff = _lerobot_feature(info, ("velocit",)), _lerobot_feature(info, ("effort", "torque"))
@@ -153,13 +155,15 @@ def read_lerobot(root: Path) -> list[Trajectory]:
     for ep, g in df.groupby("episode_index", sort=True):
         g = g.sort_values("frame_index") if "frame_index" in g else g
         where = f"{root.name}/episode {ep}"
-        state, action = _stack(g, "observation.state", where), _stack(g, "action", where)
+        state = _stack(g, "observation.state", where)
+        action = None if torque_log else _stack(g, "action", where)
         t = g["timestamp"].to_numpy(dtype=np.float64) if "timestamp" in g else np.arange(len(g)) / fps
         trajs.append(Trajectory(
-            f"episode_{int(ep):06d}", t, state[:, :7], action[:, :7],
+            f"episode_{int(ep):06d}", t, state[:, :7], None if action is None else action[:, :7],
             _stack(g, vel, where)[:, :7] if vel and vel in g else None,
             _stack(g, eff, where)[:, :7] if eff and eff in g else None,
-            state[:, 7] if state.shape[1] > 7 else None, action[:, 7] if action.shape[1] > 7 else None, fps,
+            state[:, 7] if state.shape[1] > 7 else None,
+            action[:, 7] if action is not None and action.shape[1] > 7 else None, None if torque_log else fps,
         ))
     return trajs
 

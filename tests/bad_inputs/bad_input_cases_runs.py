@@ -420,6 +420,17 @@ CASES: list[Case] = [
     Case("model-payload-offset-inf", call=_model_setting("payload", offset=[0, 0, float("inf")]), error=r"offset: expected finite numbers"),
     cli("model-file-direction-velocity-0", f"sysid compare {{root}}/good --model {{root}}/models/direction_velocity_0.yaml --device cpu --workers 1",
         r"direction_velocity_0\.yaml: effects\[0\]\.config\.direction_velocity: must be > 0 rad/s"),
+    # ------------------------------------------------------------------------ repeated flags: an error, or they accumulate
+    cli("eval-seed-twice", ev("{root}/ev_seed", seed="1") + " --seed 2", r"argument --seed: given twice \(1, then 2\); give it once"),
+    cli("eval-policy-twice", ev("{root}/ev_twice") + " --policy random", r"argument --policy: given twice \('zero', then 'random'\)"),
+    cli("eval-tasks-twice-accumulate", ev("{root}/ev_twice") + " --tasks REALM-Nope-v1", r"unknown task\(s\) REALM-Nope-v1"),
+    cli("report-out-twice", "eval report {root}/run_ok --out {root}/a.html --out {root}/b.html", r"argument --out: given twice \('.*a\.html', then"),
+    cli("validate-json-twice", "validate {root}/percent_ok.csv --json {root}/a.json --json {root}/b.json", r"argument --json: given twice"),
+    cli("export-repo-id-twice", f"export --tasks {TASK} --episodes 1 --out {{root}}/ex0 --repo-id a/b --repo-id c/d", r"argument --repo-id: given twice"),
+    cli("export-tasks-twice-accumulate", f"export --tasks {TASK} --tasks REALM-Nope-v1 --episodes 1 --out {{root}}/ex0",
+        r"unknown task\(s\) \['REALM-Nope-v1'\]"),
+    cli("sheet-seed-twice", f"perturbations sheet --task {TASK} --out {{root}}/s.png --seed 1 --seed 2", r"argument --seed: given twice"),
+    cli("assets-out-twice", "assets build --source procedural --out {root}/c1 --out {root}/c2", r"argument --out: given twice"),
     # ------------------------------------------------------------------------ policy specs (Python API)
     Case("api-openpi-port-99999", call=_policy("openpi:127.0.0.1:99999"), error=r"port: must be <= 65535"),
     Case("api-openpi-wait-nan", call=_policy("openpi:127.0.0.1:1", openpi_wait_s=float("nan")), error=r"--openpi-wait: must be a finite"),

@@ -4,8 +4,8 @@ whatever the rate; a rate only decides at which state the terms are evaluated.
 
 Each returns the step's terms as ``StepTerms`` ("kp", "kd", "bias", and for the exact integrator
 "mass", "minv", "phi"), whose ``bias_at(q)`` is the feed-forward corrected to first order in gravity
-for the measured q. ``extend(terms, dt)`` (optional) adds what an integrator derives from the terms
-once per evaluation (the folded exact step's affine map). ``extra``: a function giving the plant
+for the measured q. ``extend(terms, dt)`` (optional; for "path" it receives the whole plan) adds
+what an integrator derives from the terms once per evaluation (the folded exact step's affine map). ``extra``: a function giving the plant
 inertia the actuation stages add (or None), called only where the terms are evaluated.
 """
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from realm_ms.rendering import CAMERA_UIDS as CAMERAS  # the env's camera uids
+from realm_ms.rendering import CAMERA_UIDS as CAMERAS  # noqa: F401  (the env's camera uids, re-exported)
 
 
 @dataclass

@@ -95,15 +95,21 @@ def payload(values, s, config, eps: float = 1e-4):
     com = torch.tensor([values.get(f"com_{a}", o) for a, o in zip("xyz", config.offset)], dtype=torch.float64)
     arm = s.arm
 
-    def jp(q):
-        frames = arm.link_frames(q)
-        jac = arm.jacobian(q, frames)
-        tip = frames[:, -1] @ arm.tip_offset
-        r = tip[:, :3, :3] @ com
+    def geometry():  # tip Jacobian and rotation at q, q + eps q̇, q - eps q̇ (independent of the payload)
+        out = []
+        for q in (s.q, s.q + eps * s.qd, s.q - eps * s.qd):
+            frames = arm.link_frames(q)
+            out.append((arm.jacobian(q, frames), (frames[:, -1] @ arm.tip_offset)[:, :3, :3]))
+        return out
+
+    geo = s.cached("payload_geometry", geometry)
+
+    def jp(jac, rot):  # translational Jacobian of the point at ``com`` (flange frame)
+        r = rot @ com
         return jac[:, :3] + torch.linalg.cross(jac[:, 3:], r[:, :, None].expand_as(jac[:, 3:]), dim=1)
 
-    j0 = jp(s.q)
-    jdot_qd = ((jp(s.q + eps * s.qd) - jp(s.q - eps * s.qd)) @ s.qd[..., None])[..., 0] / (2 * eps)
+    j0 = jp(*geo[0])
+    jdot_qd = ((jp(*geo[1]) - jp(*geo[2])) @ s.qd[..., None])[..., 0] / (2 * eps)
     acc = (j0 @ s.qdd[..., None])[..., 0] + jdot_qd
     force = m * (acc - arm.gravity.to(torch.float64))
     return (j0.transpose(1, 2) @ force[..., None])[..., 0]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from realm_ms.agents.effects import EFFECTS
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judge_verdict
 from realm_ms.sysid.timeseries import Trajectory
@@ -74,7 +75,9 @@ def diagnose(train, held, model=None, candidates=None, config: DiagnoseConfig | 
     tr, he = sets or _sets(train, held)
     base_terms = terms_of(model, log)
     present = {t.name for t in base_terms}
-    names = [n for n in (candidates or TERMS) if n not in present and n not in TRACKING_ONLY]
+    if candidates is None:  # the config's library candidates + the torque-space-only terms
+        candidates = [n for n in TERMS if n in cfg.candidates or n not in EFFECTS]
+    names = [n for n in candidates if n not in present and n not in TRACKING_ONLY]
     base_tr, _ = rmse(tr, base_terms)
     base_he, per_he = rmse(he, base_terms)
     floor = _floor(he)
