@@ -25,7 +25,7 @@ def _records(run: Path) -> list[dict]:
 
 
 def test_import_registers_every_id_whatever_argv0_is():
-    from realm_ms.registration import TASK_MODULES
+    from realm_ms.task_index import TASK_MODULES
 
     code = ("import sys; sys.argv = ['realm', 'eval']\n"
             "import realm_ms, gymnasium as gym\n"
@@ -40,7 +40,7 @@ def test_import_registers_every_id_whatever_argv0_is():
 
 def test_every_task_module_is_listed():
     """TASK_MODULES is the one list of tasks: every module under realm_ms/tasks that declares a task is in it."""
-    from realm_ms.registration import TASK_MODULES
+    from realm_ms.task_index import TASK_MODULES
 
     declared = {}
     for path in (ROOT / "realm_ms" / "tasks").glob("*.py"):

@@ -3,15 +3,16 @@
 Layers, lowest first (a package may import only packages of lower layers, its own modules, and
 the leaf utilities)::
 
-    registry, registration, errors, validate,        leaf utilities (registration: REALM ids,
-    contacts, rendering, known_warnings, jsonable     imports the pack by name on first make)
+    registry, task_index, errors, validate,          leaf utilities (task_index: the task ids,
+    contacts, rendering, known_warnings, jsonable     horizon and Default, shared by every layer)
     agents, assets, asset_pipeline                    the robot; objects and their pipeline
     tasks, sysid                                      envs (on agents + assets); sysid (on agents)
     perturbations                                     reconfiguration hooks on tasks
     expert                                            scripted policy on tasks
     eval                                              policies, runner, metrics, report
     lerobot, lerobot_env_realm                        LeRobot export and env plugin
-    cli, demo, render_cli, realm_ms/__init__          entry points (may import anything)
+    cli, demo, render_cli, realm_ms/__init__,         entry points (may import anything; registration
+    registration                                      loads the task pack on an env's first make)
 
 Imports inside functions and under ``if TYPE_CHECKING:`` count too: a lazy import still ties the
 two modules together, and an annotation-only one still says each needs the other to be read.
@@ -29,7 +30,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("realm_ms", "asset_pipeline", "lerobot_env_realm")
-LEAVES = {"realm_ms.registry", "realm_ms.registration", "realm_ms.known_warnings", "realm_ms.errors", "realm_ms.validate", "realm_ms.contacts", "realm_ms.rendering",
+LEAVES = {"realm_ms.registry", "realm_ms.task_index", "realm_ms.known_warnings", "realm_ms.errors", "realm_ms.validate", "realm_ms.contacts", "realm_ms.rendering",
           "realm_ms.jsonable"}
 LAYERS = [
     {"realm_ms.agents", "realm_ms.assets", "asset_pipeline"},
@@ -39,7 +40,7 @@ LAYERS = [
     {"realm_ms.eval"},
     {"realm_ms.lerobot", "lerobot_env_realm"},
 ]
-ENTRY_POINTS = {"realm_ms", "realm_ms.cli", "realm_ms.demo", "realm_ms.render_cli", "realm_ms.__main__"}
+ENTRY_POINTS = {"realm_ms", "realm_ms.registration", "realm_ms.cli", "realm_ms.demo", "realm_ms.render_cli", "realm_ms.__main__"}
 # same-layer edges that are NOT allowed (sysid replays the benchmark's own robot, never its tasks)
 FORBIDDEN_SAME_LAYER = {("realm_ms.sysid", "realm_ms.tasks"), ("realm_ms.tasks", "realm_ms.sysid"),
                         ("realm_ms.agents", "realm_ms.assets"), ("realm_ms.assets", "realm_ms.agents")}

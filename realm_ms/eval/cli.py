@@ -16,6 +16,8 @@ from pathlib import Path
 
 from realm_ms.eval.protocol import DEFAULT, PRESETS
 
+MAX_EPISODES = 100_000  # per (task, perturbation) cell; REALM runs 25
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser("eval", help="evaluate a policy under the REALM protocol; `realm eval report RUN/` for the report",
@@ -84,6 +86,8 @@ def resolve(args):
     for name in ("episodes", "max_steps", "replan_every"):
         if getattr(proto, name) < 1:
             raise UserError(f"--{name.replace('_', '-')} must be >= 1")
+    if proto.episodes > MAX_EPISODES:  # the plan lists every episode: 10**9 would never start
+        raise UserError(f"--episodes {proto.episodes}: at most {MAX_EPISODES} per (task, perturbation) cell")
     from realm_ms.validate import check_seed
 
     check_seed(proto.seed, "--seed", proto.episodes)  # every episode's seed + i, not only the first

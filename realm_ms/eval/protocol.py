@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from realm_ms.registration import DEFAULT  # noqa: F401  (re-exported for eval's modules)
+from realm_ms.task_index import DEFAULT  # noqa: F401  (re-exported for eval's modules)
 
 
 @dataclass(frozen=True)

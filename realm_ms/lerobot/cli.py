@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from realm_ms.registration import DEFAULT
+from realm_ms.task_index import DEFAULT
 
 
 def add_parser(sub) -> None:

@@ -21,7 +21,7 @@ import numpy as np
 
 from realm_ms.jsonable import jsonable
 from realm_ms.lerobot.features import DEFAULT_SIZE, obs_to_numpy
-from realm_ms.registration import DEFAULT as DEFAULT_PERTURBATION
+from realm_ms.task_index import DEFAULT as DEFAULT_PERTURBATION
 
 
 @dataclass

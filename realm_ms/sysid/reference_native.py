@@ -97,8 +97,9 @@ def build_native_model(fx: NativeEffects, config: MujocoConfig):
         link7 = spec.body("panda_link7")
         pos = flange_offset_in_link7() + np.asarray(fx.payload_com, dtype=float)
         i = max(fx.payload_inertia, 1e-9)
-        link7.add_body(name="payload", pos=list(pos), mass=float(fx.payload_mass), inertia=[i, i, i],
-                       explicitinertial=True)
+        # ipos explicitly at the body origin: left out, MjSpec copies ``pos`` into it (CoM twice as far)
+        link7.add_body(name="payload", pos=list(pos), ipos=[0.0, 0.0, 0.0], mass=float(fx.payload_mass),
+                       inertia=[i, i, i], explicitinertial=True)
     m = spec.compile()
     m.opt.timestep = 1.0 / (config.law_hz * config.substeps)
     m.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER

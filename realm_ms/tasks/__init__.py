@@ -2,7 +2,7 @@
 
 import importlib
 
-from realm_ms.registration import TASK_MODULES
+from realm_ms.task_index import TASK_MODULES
 from realm_ms.tasks import articulated  # noqa: F401  (registers the "articulated/..." object builders)
 from realm_ms.tasks.config import RealmEnvConfig, make_env  # noqa: F401
 from realm_ms.tasks.env import RealmEnv, register_task  # noqa: F401

@@ -423,7 +423,6 @@ def register_task(spec: TaskSpec, base: type[RealmEnv] = RealmEnv) -> type[Realm
     from the task's own module: the class reports that module."""
     from mani_skill.utils.registration import register_env
 
-    from realm_ms.registration import unregister_placeholder
     from realm_ms.tasks.progression import RUBRICS
 
     TASKS.register(spec.env_id, spec)
@@ -438,6 +437,22 @@ def register_task(spec: TaskSpec, base: type[RealmEnv] = RealmEnv) -> type[Realm
     )
     module = sys._getframe(1).f_globals.get("__name__", base.__module__)
     cls = type(name, (base,), {"task_spec": spec, "__doc__": doc, "__module__": module})
-    unregister_placeholder(spec.env_id, spec.horizon)
+    _drop_placeholder(spec)
     register_env(spec.env_id, max_episode_steps=spec.horizon)(cls)
     return cls
+
+
+def _drop_placeholder(spec: TaskSpec) -> None:
+    """``import realm_ms`` registered ``spec.env_id`` as a placeholder that loads the task pack on
+    first make (``realm_ms.registration``): drop it so ManiSkill registers the id without an
+    "Overriding environment" warning. The placeholder's horizon must be the task's, or the first env
+    of a process would be cut at another step."""
+    import gymnasium as gym
+
+    placeholder = gym.registry.get(spec.env_id)
+    if placeholder is None or not getattr(placeholder.entry_point, "realm_placeholder", False):
+        return
+    if placeholder.max_episode_steps != spec.horizon:
+        raise ValueError(f"{spec.env_id}: horizon {spec.horizon} differs from its placeholder's "
+                         f"({placeholder.max_episode_steps}, realm_ms.task_index.HORIZON): keep them equal")
+    del gym.registry[spec.env_id]

@@ -33,7 +33,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from realm_ms.registration import DEFAULT  # noqa: F401  (re-exported beside the registry)
+from realm_ms.task_index import DEFAULT  # noqa: F401  (re-exported beside the registry)
 from realm_ms.registry import Registry
 from realm_ms.tasks.task_spec import TaskSpec
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.urdf import DROID_RESET_QPOS
-from realm_ms.registration import HORIZON
+from realm_ms.task_index import HORIZON
 from realm_ms.registry import Registry
 from realm_ms.tasks.skills import Skill, as_skill
 

@@ -34,6 +34,11 @@ def make_policy(spec: str, **options) -> Policy:
     return factory(arg or None, **options)
 
 
+def policy_names() -> list[str]:
+    _register_builtins()
+    return POLICIES.names()
+
+
 def policy_action_space(policy: Policy, options: dict | None = None) -> dict:
     """Env keywords of the DROID action space ``policy`` acts in: its own declaration
     (``env_action_space()``, e.g. an openpi server's metadata), else ``options["action_space"]``
