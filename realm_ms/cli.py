@@ -53,7 +53,11 @@ def build_parser(load: Iterable[str] | None = None) -> argparse.ArgumentParser:
             sub.add_parser(name, help=help_text, add_help=False)
             continue
         importlib.import_module(module).add_parser(sub)
-    return parser
+    from realm_ms.validate import forbid_repeats
+
+    # every command: a single-valued option given twice is an error (never last-one-wins in silence);
+    # list options (nargs="+") and append options accumulate
+    return forbid_repeats(parser)
 
 
 def _command(argv: list[str]) -> str | None:

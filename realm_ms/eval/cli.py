@@ -286,7 +286,7 @@ def run_report(args) -> int:
     from realm_ms.errors import UserError
     from realm_ms.eval.report import write_report
 
-    from realm_ms.eval.records import format_problems, read_records
+    from realm_ms.eval.records import format_problems, numbered_records
     from realm_ms.eval.report import PAPER
     from realm_ms.validate import check_output_path
 
@@ -301,8 +301,18 @@ def run_report(args) -> int:
     out = check_output_path(args.report_out or args.run_dir / "report.html", "--out", "file", example="report.html")
     check_output_path(out.parent / (out.stem + "_files"), "--out (its figures directory)", "dir")
     problems: list[str] = []
-    if not read_records(records_path, problems):
+    numbered = numbered_records(records_path, problems)
+    if not numbered:
         raise UserError(f"{records_path}: no readable records" + (f" ({problems[0]})" if problems else ""))
+    first = numbered[0][1].get("fingerprint")
+    other = next(((n, r.get("fingerprint")) for n, r in numbered if r.get("fingerprint") != first), None)
+    if other is not None:  # records of two setups in one run directory: one report would mix them
+        from realm_ms.eval.rundir import differences
+
+        n, theirs = other
+        diff = "; ".join(differences(theirs, first)) if isinstance(theirs, dict) and isinstance(first, dict) else "one has no run fingerprint"
+        raise UserError(f"{records_path}: line {n} was made differently from line {numbered[0][0]} ({diff}); "
+                        "keep one run per directory (`realm eval` refuses to mix them)")
     if problems:
         print(f"realm eval report: warning: {len(problems)} line(s) are not records and are left out:\n{format_problems(problems)}",
               file=sys.stderr)

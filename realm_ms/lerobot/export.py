@@ -59,6 +59,8 @@ class ExportConfig:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ExportError(f"{flag} must be >= 1 (got {v!r})")
+        if self.episodes > 100_000:  # the plan lists every seed to try: a huge count would never start
+            raise ExportError(f"--episodes {self.episodes}: at most 100000 per (task, perturbation)")
         if self.max_steps is not None and (isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1):
             raise ExportError(f"--max-steps must be >= 1 (got {self.max_steps!r}); leave it out for the task horizon")
         if self.width < 16 or self.height < 16:

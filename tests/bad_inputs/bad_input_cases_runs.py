@@ -72,6 +72,8 @@ def make_files(root: Path) -> None:
     # records of a realm-ms without fingerprints (or written by hand)
     d = _copy_run(root, "run_legacy", drop=("run.json",))
     _write_records(d / "records.jsonl", [{k: v for k, v in x.items() if k != "fingerprint"} for x in ok])
+    d = _copy_run(root, "run_half_legacy")
+    _write_records(d / "records.jsonl", ok + [{k: v for k, v in dict(ok[0], seed=1236).items() if k != "fingerprint"}])
     # damaged run.json
     for name, data in (("run_json_corrupt", b'{"policy": "zero", '), ("run_json_list", b"[1, 2, 3]"),
                        ("run_json_binary", bytes(range(128, 256)))):
@@ -119,6 +121,7 @@ def make_files(root: Path) -> None:
     }
     for name, rows in csvs.items():
         (root / f"{name}.csv").write_text(CSV_HEADER + rows)
+    (root / "bom.csv").write_bytes(b"\xef\xbb\xbf" + (CSV_HEADER + "p1,A,0.4,0.3\np2,A,0.5,0.6\np3,A,0.2,0.1\n").encode())
     (root / "not_utf8.csv").write_bytes(b"policy,task,real,sim\n\xff\xfe,A,0.1,0.2\n")
 
 
@@ -269,6 +272,22 @@ def _v_sc_small_catalog(root):
             os.environ["REALM_ASSETS_DIR"] = old
 
 
+def _perturbations_list(root):
+    from realm_ms.perturbations import all_perturbations
+
+    r = _realm(["perturbations", "list"], environ={"COLUMNS": "100"})
+    return r, [p.describe() for p in all_perturbations()]
+
+
+def _check_list_wraps(res):
+    r, rows = res
+    assert r.returncode == 0 and max(map(len, r.stdout.splitlines())) <= 100, r.stdout
+    words = r.stdout.split()
+    for row in rows:  # every word of every "changes" and "ranges" text is printed: wrapped, not cut
+        for w in f"{row['acts_on']} {row['ranges']}".split():
+            assert w in words, (row["name"], w)
+
+
 def _no_grpc() -> bool:
     import importlib.util
 
@@ -281,6 +300,8 @@ CASES: list[Case] = [
     cli("eval-seed-2-pow-40", ev("{root}/ev_seed", seed="1099511627776"), r"argument --seed: must be <= 4294967295"),
     cli("eval-seed-last-episode-overflows", ev("{root}/ev_seed", seed="4294967295"), r"--seed: seeds 4294967295\.\.4294967296 go past 2\*\*32 - 1"),
     cli("eval-seed-text", ev("{root}/ev_seed", seed="12ab"), r"argument --seed: expected an integer"),
+    cli("eval-episodes-huge-no-hang", ev("{root}/ev_huge", episodes="1000000000"), r"--episodes 1000000000: at most 100000"),
+    cli("eval-camera-size-three-parts", ev("{root}/ev_cam", camera_size="64x36x3"), r"--camera-size must be WxH"),
     cli("eval-openpi-wait-nan-no-hang", ev("{root}/ev_pi", policy="openpi:127.0.0.1:1", openpi_wait="nan"),
         r"argument --openpi-wait: must be a finite number", subprocess=True),
     cli("eval-openpi-wait-0", ev("{root}/ev_pi", policy="openpi:127.0.0.1:1", openpi_wait="0"), r"argument --openpi-wait: must be > 0 s"),
@@ -330,6 +351,8 @@ CASES: list[Case] = [
     cli("report-run-is-file", "eval report {root}/a_file.txt", r"RUN .*a_file\.txt is a file"),
     cli("report-run-without-records", "eval report {root}/run_empty", r"run_empty has no records\.jsonl"),
     cli("report-only-garbage", "eval report {root}/run_only_garbage", r"records\.jsonl: no readable records \(.*records\.jsonl:1: `task` is missing"),
+    cli("report-mixed-fingerprints", "eval report {root}/run_mixed", r"records\.jsonl: line 3 was made differently from line 1 \(max_steps 3 vs 2"),
+    cli("report-records-without-fingerprint-mixed", "eval report {root}/run_half_legacy", r"line 3 was made differently .*one has no run fingerprint"),
     Case("report-garbage-lines-reported", call=_report_garbage, check=_check_report,
          accepted="a report over a run with garbage lines: written, the lines reported by number"),
     # ------------------------------------------------------------------------ realm validate
@@ -342,6 +365,8 @@ CASES: list[Case] = [
     cli("validate-duplicate-identical", "validate {root}/duplicate_same.csv", r"duplicate_same\.csv:4: policy 'p1' on task 'A' is given again"),
     cli("validate-nan", "validate {root}/nan_value.csv", r"nan_value\.csv:2: real must be finite"),
     cli("validate-empty-policy", "validate {root}/empty_policy.csv", r"empty_policy\.csv:2: empty policy or task name"),
+    Case("validate-byte-order-mark", call=_validate("bom"), check=lambda res: res[0] == 0 or pytest.fail(res[1]),
+         accepted="a spreadsheet's UTF-8 byte-order mark before the header is not part of the column name"),
     cli("validate-not-utf8", "validate {root}/not_utf8.csv", r"not_utf8\.csv: not a UTF-8 text"),
     cli("validate-csv-is-dir", "validate {root}/out_dir", r"out_dir is a directory, expected a CSV file"),
     cli("validate-json-is-dir", "validate {root}/percent_ok.csv --percent --json {root}/out_dir", r"--json: .*out_dir is a directory; give a file path"),
@@ -355,6 +380,10 @@ CASES: list[Case] = [
     Case("validate-percent-flag", call=_validate("percent_ok", "--percent"), check=_check_percent,
          accepted="--percent reads 0-100 values as rates / 100"),
     # ------------------------------------------------------------------------ realm export
+    cli("export-episodes-huge", f"export --tasks {TASK} --episodes 1000000000 --out {{root}}/ex0", r"--episodes 1000000000: at most 100000"),
+    cli("export-policy-unknown", f"export --tasks {TASK} --episodes 1 --policy nope --out {{root}}/ex_nope", r"unknown policy 'nope'; known: .*expert"),
+    cli("export-policy-lerobot-missing", f"export --tasks {TASK} --episodes 1 --policy lerobot:/nonexistent/ckpt --out {{root}}/ex_nope",
+        r"no such checkpoint directory /nonexistent/ckpt"),
     cli("export-episodes-0", f"export --tasks {TASK} --episodes 0 --out {{root}}/ex0", r"--episodes must be >= 1 \(got 0\)"),
     cli("export-max-steps-0", f"export --tasks {TASK} --episodes 1 --max-steps 0 --out {{root}}/ex0", r"--max-steps must be >= 1 \(got 0\)"),
     cli("export-max-steps-neg", f"export --tasks {TASK} --episodes 1 --max-steps -8 --out {{root}}/ex0", r"--max-steps must be >= 1"),
@@ -385,6 +414,8 @@ CASES: list[Case] = [
     cli("sheet-width-0", f"perturbations sheet --task {TASK} --out {{root}}/s.png --width 0", r"argument --width: must be >= 16"),
     cli("sheet-height-huge", f"perturbations sheet --task {TASK} --out {{root}}/s.png --height 100000", r"argument --height: must be <= 4096"),
     cli("sheet-shader-bogus", f"perturbations sheet --task {TASK} --out {{root}}/s.png --shader bogus", r"argument --shader: invalid choice: 'bogus'"),
+    Case("perturbations-list-wraps", call=_perturbations_list, check=_check_list_wraps,
+         accepted="`realm perturbations list` wraps its changes and ranges columns to the terminal, never cuts them"),
     Case("v-sc-small-user-catalog", call=_v_sc_small_catalog, env=True,
          error=r"V-SC draws 3 object\(s\) of different categories .* catalog at .*small_catalog has \d+ in \d+ categor.*missing categories: .*realm assets build --source procedural"),
     # ------------------------------------------------------------------------ realm assets build
@@ -401,8 +432,8 @@ CASES: list[Case] = [
     Case("scene-tuple-wrong-length", call=_scene("kitchen?table_half_size=0.4,0.7"), error=r"expected 3 comma-separated numbers"),
     Case("scene-half-size-neg", call=_scene("kitchen?table_half_size=-0.4,0.7,0.02"), error=r"half sizes must be > 0"),
     Case("scene-height-nan", call=_scene("kitchen?table_height=nan"), error=r"table_height='nan': expected a finite number"),
-    Case("scene-height-text", call=_scene("kitchen?table_height=tall"), error=r"table_height='tall': expected a number"),
-    Case("scene-seed-fraction", call=_scene("kitchen?seed=1.5"), error=r"seed='1\.5': expected an integer"),
+    Case("scene-height-text", call=_scene("kitchen?table_height=tall"), error=r"table_height='tall': expected a float"),
+    Case("scene-seed-fraction", call=_scene("kitchen?seed=1.5"), error=r"seed='1\.5': expected an int"),
     Case("scene-no-value", call=_scene("kitchen?table_height"), error=r"malformed options 'table_height'"),
     Case("scene-nested-option", call=_scene("kitchen?lamps=1"), error=r"option 'lamps' cannot be set in a scene name"),
     Case("scene-tuple-accepted", call=_scene("kitchen?table_half_size=0.4,0.7,0.02&table_height=0.74"), check=_check_scene,
@@ -431,6 +462,9 @@ CASES: list[Case] = [
         r"unknown task\(s\) \['REALM-Nope-v1'\]"),
     cli("sheet-seed-twice", f"perturbations sheet --task {TASK} --out {{root}}/s.png --seed 1 --seed 2", r"argument --seed: given twice"),
     cli("assets-out-twice", "assets build --source procedural --out {root}/c1 --out {root}/c2", r"argument --out: given twice"),
+    cli("demo-out-twice", "demo --out {root}/d1 --out {root}/d2", r"argument --out: given twice"),
+    cli("render-out-twice", "render sheet --out {root}/r1.png --out {root}/r2.png", r"argument --out: given twice"),
+    cli("sysid-compare-json-twice", "sysid compare {root}/nope --json {root}/a.json --json {root}/b.json", r"argument --json: given twice"),
     # ------------------------------------------------------------------------ policy specs (Python API)
     Case("api-openpi-port-99999", call=_policy("openpi:127.0.0.1:99999"), error=r"port: must be <= 65535"),
     Case("api-openpi-wait-nan", call=_policy("openpi:127.0.0.1:1", openpi_wait_s=float("nan")), error=r"--openpi-wait: must be a finite"),

@@ -62,7 +62,7 @@ def _option_value(key: str, raw: str, cur):
         try:
             v = kind(text)
         except ValueError:
-            raise ValueError(f"scene option {key}={raw!r}: expected {'an integer' if kind is int else 'a number'}") from None
+            raise ValueError(f"scene option {key}={raw!r}: expected {'an int' if kind is int else 'a float'}") from None
         if not math.isfinite(v):
             raise ValueError(f"scene option {key}={raw!r}: expected a finite number")
         return v
