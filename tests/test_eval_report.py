@@ -152,3 +152,17 @@ def test_demo_index_compares_both_policies_and_shows_the_learned_policys_failure
     header = report[:report.index("<h2")]
     for text in ("24 control steps (1.6 s at 15 Hz)", "160x90 per camera", "joint_position", "realm-ms ", "0 error records"):
         assert text in header, text
+
+
+def test_realm_eval_report_of_several_runs_writes_one_index(tmp_path, capsys):
+    from realm_ms.cli import main
+
+    expert, zero = _expert_and_zero(tmp_path)
+    assert main(["eval", "report", str(expert), str(zero)]) == 2  # an index needs a name
+    assert "name it with --out" in capsys.readouterr().err
+    out = tmp_path / "cmp" / "index.html"
+    assert main(["eval", "report", str(expert), str(zero), "--out", str(out)]) == 0
+    page = out.read_text()
+    assert "4/4 = 1.00 [0.51, 1.00]" in page and "0/4 = 0.00 [0.00, 0.49]" in page
+    assert main(["eval", "report", str(expert), str(tmp_path / "nope"), "--out", str(out)]) == 2
+    assert "does not exist" in capsys.readouterr().err

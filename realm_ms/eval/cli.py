@@ -51,9 +51,12 @@ def add_parser(sub) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--out", type=Path, help="required: run directory (run.json, records.jsonl, metrics.json); the same --out resumes")
     rsub = p.add_subparsers(dest="eval_command", title="report a finished run", metavar="report RUN/")
-    r = rsub.add_parser("report", prog="realm eval report", help="HTML report (+ PNGs, markdown/CSV table) of a run directory")
-    r.add_argument("run_dir", type=Path, help="run directory written by `realm eval`")
-    r.add_argument("--out", dest="report_out", type=Path, default=None, help="HTML file (default RUN/report.html)")
+    r = rsub.add_parser("report", prog="realm eval report",
+                        help="HTML report (+ PNGs, markdown/CSV table) of a run directory; several: one index comparing them")
+    r.add_argument("run_dir", type=Path, nargs="+", metavar="RUN",
+                   help="run directory written by `realm eval`; give several (one policy each) for an index page comparing them")
+    r.add_argument("--out", dest="report_out", type=Path, default=None,
+                   help="HTML file (default RUN/report.html; required with several RUN)")
     r.add_argument("--videos", dest="report_videos", choices=("none", "failures", "all"), default="failures", help="which episode videos to link")
     r.add_argument("--reference", default=None, help="also tabulate REALM's paper numbers for a policy (pi0, pi0-FAST, GR00T)")
     p.set_defaults(func=run)
@@ -284,22 +287,38 @@ def _error_exit(errors: list, out: Path) -> int:
 
 def run_report(args) -> int:
     from realm_ms.errors import UserError
-    from realm_ms.eval.report import write_report
-
-    from realm_ms.eval.records import format_problems, numbered_records
-    from realm_ms.eval.report import PAPER
+    from realm_ms.eval.report import PAPER, write_index, write_report
     from realm_ms.validate import check_output_path
 
-    if not args.run_dir.is_dir():
-        what = "is a file" if args.run_dir.exists() else "does not exist"
-        raise UserError(f"RUN {args.run_dir} {what}; give the run directory of `realm eval --out RUN`")
-    records_path = args.run_dir / "records.jsonl"
-    if not records_path.exists():
-        raise UserError(f"{args.run_dir} has no records.jsonl (run `realm eval ... --out {args.run_dir}` first)")
     if args.reference is not None and args.reference not in PAPER:
         raise UserError(f"--reference {args.reference!r}: no paper numbers for it; known: {', '.join(PAPER)}")
-    out = check_output_path(args.report_out or args.run_dir / "report.html", "--out", "file", example="report.html")
+    runs = list(dict.fromkeys(args.run_dir))
+    for run_dir in runs:
+        _check_report_run(run_dir)
+    if len(runs) > 1:  # one page comparing the runs side by side, linking each run's own report
+        if args.report_out is None:
+            raise UserError(f"{len(runs)} RUN directories make one index page: name it with --out (e.g. --out index.html)")
+        out = check_output_path(args.report_out, "--out", "file", example="index.html")
+        print(f"wrote {write_index(runs, out)}")
+        return 0
+    out = check_output_path(args.report_out or runs[0] / "report.html", "--out", "file", example="report.html")
     check_output_path(out.parent / (out.stem + "_files"), "--out (its figures directory)", "dir")
+    path = write_report(runs[0], out, videos=args.report_videos, reference=args.reference)
+    print(f"wrote {path}")
+    return 0
+
+
+def _check_report_run(run_dir: Path) -> None:
+    """A readable run of one setup, or one line saying what is wrong; unreadable lines are a warning."""
+    from realm_ms.errors import UserError
+    from realm_ms.eval.records import format_problems, numbered_records
+
+    if not run_dir.is_dir():
+        what = "is a file" if run_dir.exists() else "does not exist"
+        raise UserError(f"RUN {run_dir} {what}; give the run directory of `realm eval --out RUN`")
+    records_path = run_dir / "records.jsonl"
+    if not records_path.exists():
+        raise UserError(f"{run_dir} has no records.jsonl (run `realm eval ... --out {run_dir}` first)")
     problems: list[str] = []
     numbered = numbered_records(records_path, problems)
     if not numbered:
@@ -314,8 +333,5 @@ def run_report(args) -> int:
         raise UserError(f"{records_path}: line {n} was made differently from line {numbered[0][0]} ({diff}); "
                         "keep one run per directory (`realm eval` refuses to mix them)")
     if problems:
-        print(f"realm eval report: warning: {len(problems)} line(s) are not records and are left out:\n{format_problems(problems)}",
-              file=sys.stderr)
-    path = write_report(args.run_dir, out, videos=args.report_videos, reference=args.reference)
-    print(f"wrote {path}")
-    return 0
+        print(f"realm eval report: warning: {len(problems)} line(s) of {records_path} are not records and are left out:\n"
+              f"{format_problems(problems)}", file=sys.stderr)
