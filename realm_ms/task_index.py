@@ -21,3 +21,6 @@ TASK_MODULES: dict[str, str] = {
 }
 HORIZON = 800  # control steps, REALM's episode length (TaskSpec.horizon's default)
 DEFAULT = "Default"  # the unperturbed setting (perturbation id 0): the one spelling every layer uses
+# the package whose import registers every perturbation into realm_ms.tasks.perturbation.PERTURBATIONS:
+# an env that is asked for one loads it by this name (a plugin, as gymnasium's "module:EnvId")
+PERTURBATION_PACKAGE = "realm_ms.perturbations"

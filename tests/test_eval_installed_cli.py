@@ -63,6 +63,20 @@ def test_first_make_is_wrapped_like_every_later_one():
     assert "TimeLimitWrapper" in wrappers and "PickAppleEnv" in wrappers
 
 
+def test_perturbations_load_whatever_was_imported_first():
+    """A task module imported directly (no gymnasium placeholder, no perturbation package yet):
+    an env asked for a perturbation still finds it."""
+    code = ("import sys\n"
+            "from realm_ms.tasks import TASKS\n"
+            "assert 'realm_ms.perturbations' not in sys.modules\n"
+            "import gymnasium as gym\n"
+            "env = gym.make('REALM-PickApple-v1', obs_mode='state', perturbation='V-LIGHT')\n"
+            "print(env.reset(seed=0)[1]['perturbation']['names'])")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.strip().splitlines()[-1] == "['V-LIGHT']"
+
+
 @needs_script
 def test_installed_realm_eval_with_two_workers_makes_every_env(tmp_path):
     run = tmp_path / "run"

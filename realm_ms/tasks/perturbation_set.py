@@ -9,10 +9,12 @@ unperturbed task untouched), and always starting from the pristine ``TaskSpec``.
 from __future__ import annotations
 
 import copy
+import importlib
 from collections.abc import Sequence
 
 import numpy as np
 
+from realm_ms.task_index import PERTURBATION_PACKAGE
 from realm_ms.tasks.perturbation import DEFAULT, PERTURBATIONS, DrawContext, Perturbation
 from realm_ms.tasks.task_spec import TaskSpec
 
@@ -44,7 +46,7 @@ class PerturbationSet:
             if isinstance(s, str) and "+" in s:  # "V-LIGHT+VB-POSE"
                 items.extend(cls.resolve(s.split("+")).items)
                 continue
-            p = s if isinstance(s, Perturbation) else PERTURBATIONS.get(s)()
+            p = s if isinstance(s, Perturbation) else _perturbation_class(s)()
             if p.pid != 0 and all(q.name != p.name for q in items):
                 items.append(p)
         return cls(items)
@@ -133,3 +135,11 @@ class PerturbationSet:
             skill=[s.skill for s in self.specs],
             params=[{p.name: copy.deepcopy(self.params[i][k]) for k, p in enumerate(self.items)} for i in range(len(self.params))],
         )
+
+
+def _perturbation_class(name: str | int) -> type[Perturbation]:
+    """The registered class of ``name``; the perturbation package registers them when imported,
+    so an env made before anything imported it (a task module imported directly) loads it here."""
+    if name not in PERTURBATIONS:
+        importlib.import_module(PERTURBATION_PACKAGE)
+    return PERTURBATIONS.get(name)
