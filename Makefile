@@ -26,8 +26,11 @@ bench-expert: setup
 bench-assets: setup
 	$(PY) bench/assets.py
 
+# diagnose + fit, then `realm sysid auto` in position space and in torque space (10 x 10 s logs)
 bench-sysid: setup
 	$(PY) bench/sysid.py
+	$(PY) bench/sysid.py --auto --hidden coulomb_friction:fc=0.3
+	$(PY) bench/sysid.py --torque
 
 bench-eval: setup
 	$(PY) bench/eval_throughput.py
