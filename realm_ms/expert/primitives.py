@@ -104,6 +104,21 @@ def move(ctx: Ctx, p, yaw: float | None = None, grip: float | None = None, speed
         yield ctx.cmd
 
 
+def catch_up(ctx: Ctx, tol: float = 0.05, max_steps: int = 30):
+    """Where the env converts the expert's joint targets into a DROID velocity or Cartesian action,
+    each step moves at most DROID's per-step limit from the *measured* pose (0.2 rad per joint,
+    0.075 m and 0.15 rad for the TCP), so a fast turn falls behind its target: hold the target until
+    every joint is within ``tol`` of it (at most ``max_steps``). Under joint-position actions the
+    controller tracks the target itself, and this waits for nothing."""
+    if getattr(ctx.env, "droid_actions", None) is None:
+        return
+    for _ in range(max_steps):
+        lag = (ctx.env.agent.arm_qpos[ctx.i].detach().cpu().double() - ctx.ex.q_cmd[ctx.i]).abs().max()
+        if float(lag) < tol:
+            break
+        yield ctx.cmd
+
+
 def hold(ctx: Ctx, steps: int, grip: float | None = None):
     if grip is not None:
         ctx.cmd = Target(ctx.cmd.p.copy(), ctx.cmd.yaw, grip)

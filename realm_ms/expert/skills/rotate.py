@@ -5,7 +5,8 @@ import math
 
 import numpy as np
 
-from realm_ms.expert.primitives import DEFAULT_YAW, grasp, hold, lift, move, obj_yaw, object_geometry, release, scaled_vertices
+from realm_ms.expert.primitives import (DEFAULT_YAW, catch_up, grasp, hold, lift, move, obj_yaw, object_geometry, release,
+                                        scaled_vertices)
 
 TURN = 1.5  # rad (> 1.1 threshold)
 CUPS = ("mug", "cup", "teacup", "coffee_cup")
@@ -44,6 +45,7 @@ def rotate(ctx, tries: int = 3):
         # turn away from the wrist limit: towards the default yaw side
         sign = 1.0 if ctx.cmd.yaw < DEFAULT_YAW + 0.3 else -1.0
         yield from move(ctx, ctx.cmd.p, yaw=ctx.cmd.yaw + sign * TURN, yaw_speed=1.5, settle=5)
+        yield from catch_up(ctx)  # the turn done before setting down (velocity / Cartesian actions lag)
         yield from lift(ctx, -0.025)
         yield from release(ctx)
         yield from lift(ctx, 0.08)
