@@ -251,10 +251,12 @@ def report(data, model=None, out: str | Path = "report.html", heldout=None, seed
 
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed)
-    if _space(train + held, None) == "torque":
-        raise DataError("report replays q_cmd under the DROID controller; this data has no q_cmd (a torque log). "
-                        "Use compare/diagnose/fit/auto --json for torque-space results")
     m = _model(model)
+    if _space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
+        from realm_ms.sysid.report.torque_report import build_torque_report
+
+        auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")
+        return build_torque_report(train, held, m if model is not None else None, Path(out), str(data), auto_result)
     diagnosis = _load_json(diagnosis, ("baseline", "suspects"), "diagnose --json")
     fit_result = _load_json(fit_result, ("history", "before", "after"), "fit --json")
     auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")

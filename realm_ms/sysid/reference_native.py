@@ -11,6 +11,11 @@ friction is our smooth law, its payload sits where ours does. Here every effect 
 | ``stiffness`` | ``jnt_stiffness`` + ``qpos_spring`` | joint springs to the trajectory's start pose (no library effect) |
 | ``payload_mass``, ``payload_com`` | a child body of ``panda_link7`` | payload with its own centre of mass (flange frame) and inertia |
 | ``link_scale`` | ``body_mass``, ``body_inertia`` | link k's mass and inertia x (1 + s) (no library effect in position space) |
+| ``gaz`` | ``qfrc_applied`` | Gaz et al. 2019's identified Panda friction (sigmoid law, ``GAZ_PHI``) x ``gaz`` |
+| ``lugre_*`` | ``qfrc_applied`` | LuGre friction: a bristle state z per joint, integrated at the plant rate |
+
+The last two are friction laws written independently of realm-ms's effect models
+(``reference_friction.py``), applied as a torque each plant substep from the substep's velocity.
 
 The controller is the independent Polymetis law of ``MujocoReference`` (from MuJoCo's own model,
 1 kHz, 4 plant substeps), evaluated on the *nominal* MuJoCo model at the plant's state: like the
@@ -26,6 +31,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from realm_ms.sysid.reference_friction import PlantFriction
 from realm_ms.sysid.reference_mujoco import URDF_COMPILER, MujocoConfig, MujocoReference
 
 
@@ -39,6 +45,13 @@ class NativeEffects:
     payload_com: tuple[float, float, float] = (0.0, 0.0, 0.0)  # m, flange frame
     payload_inertia: float = 0.0  # kg·m², about its CoM (diagonal)
     link_scale: tuple[float, ...] = (0.0,) * 7  # relative mass/inertia change of links 1..7
+    gaz: float = 0.0  # scale of Gaz et al.'s identified sigmoid friction (1: the paper's values)
+    lugre_fc: tuple[float, ...] = (0.0,) * 7  # N·m, LuGre Coulomb level (0: no LuGre on that joint)
+    lugre_fs_ratio: float = 1.5  # breakaway level / Coulomb level
+    lugre_vs: float = 0.05  # rad/s, Stribeck velocity
+    lugre_sigma0: float = 1000.0  # N·m/rad, bristle stiffness
+    lugre_sigma1: float = 1.0  # N·m·s/rad, bristle damping
+    lugre_sigma2: tuple[float, ...] = (0.0,) * 7  # N·m·s/rad, viscous part of LuGre
 
     @classmethod
     def parse(cls, text: str) -> "NativeEffects":
@@ -83,6 +96,8 @@ VARIANTS = {
     "link4_mass": "link_scale4=0.3",
     "springs": "stiffness=2.0",
     "frictionloss+payload_com": "frictionloss=0.3,payload_mass=0.8,payload_com_x=0.12,payload_com_z=0.05",
+    "gaz": "gaz=1",
+    "lugre": "lugre_fc=0.3,lugre_fc4=0.5,lugre_fc7=0.2,lugre_sigma2=0.2",
 }
 
 
@@ -160,6 +175,7 @@ class NativeReference(MujocoReference):
         d.qpos[:] = q0
         m.qpos_spring[:] = q0  # springs pull to the start pose
         steps = cmd.shape[0]
+        law = PlantFriction.of(self.native, m.opt.timestep)
         q, qd, tau = (np.empty((steps + 1, 7)) for _ in range(3))
         q[0], qd[0] = d.qpos, d.qvel
         jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
@@ -170,7 +186,7 @@ class NativeReference(MujocoReference):
             for s in range(self.config.substeps):
                 if s:
                     mujoco.mj_step1(m, d)
-                d.qfrc_applied[:] = u
+                d.qfrc_applied[:] = u if law is None else u - law.step(np.asarray(d.qvel))
                 mujoco.mj_step2(m, d)
             q[k + 1], qd[k + 1] = d.qpos, d.qvel
         tau[-1] = tau[-2]
