@@ -8,6 +8,12 @@ the GPU-parallel population (speed-up recorded).
     python bench/sysid.py --auto [--hidden ...] [--engine mujoco]   # `realm sysid auto` wall time (goal < 5 min)
     python bench/sysid.py --torque [--hidden frictionloss]             # `auto` on 10 x 10 s MuJoCo-native torque logs
 
+    python bench/sysid.py --friction-laws [--size 3,2,6] [--seeds 0,1,2]  # which friction law fits which
+
+``--friction-laws``: for MuJoCo-native data whose friction is MuJoCo's ``frictionloss``, Gaz et
+al.'s sigmoid or LuGre, torque-space ``fit`` of each friction combination (``FRICTION_FITS``):
+held-out residual / noise floor, to ``--out`` (JSON) and ``.md``.
+
 ``--auto`` times ``realm sysid auto`` (diagnose -> fit -> re-diagnose ...) on the same 10 x 10 s data;
 ``--torque`` does so in torque space on 1 kHz torque logs from ``synth --engine mujoco-native``.
 
@@ -107,6 +113,46 @@ def run_torque_sweep(args) -> int:
     return 0
 
 
+FRICTION_LAWS = ("frictionloss", "gaz", "lugre")
+FRICTION_FITS = ("coulomb_friction", "coulomb_friction,viscous_damping", "stribeck_friction,viscous_damping")
+
+
+def run_friction_laws(args) -> int:
+    """Torque-space fits of every friction combination on every plant friction law."""
+    from realm_ms.sysid.data_io import load_split
+    from realm_ms.sysid.reference_native import synth_native
+    from realm_ms.sysid.torque import verbs
+
+    n_train, n_held, dur = (int(x) for x in args.size.split(","))
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for seed in (int(x) for x in args.seeds.split(",")):
+        for law in (args.effects.split(",") if args.effects else FRICTION_LAWS):
+            with tempfile.TemporaryDirectory() as tmp:
+                synth_native(law, Path(tmp), seed=seed, n_train=n_train, n_heldout=n_held, duration_s=float(dur),
+                             with_cmd=False)
+                train, held = load_split(Path(tmp))
+            sets = verbs._sets(train, held)
+            for add in FRICTION_FITS:
+                t0 = time.perf_counter()
+                f = verbs.fit(train, held, add, log=lambda *a: None, sets=sets)
+                floor = f["noise_floor_nm"]
+                row = {"law": law, "seed": seed, "fit": add, "nominal": f["before"]["heldout_rmse_nm"],
+                       "after": f["after"]["heldout_rmse_nm"], "floor": floor,
+                       "ratio": f["after"]["heldout_rmse_nm"] / floor, "params": f["params"],
+                       "wall_s": time.perf_counter() - t0}
+                rows.append(row)
+                print(f"{law} seed {seed} + {add}: {row['nominal']:.3f} -> {row['after']:.3f} N·m = "
+                      f"{row['ratio']:.2f}x floor {floor:.3f} ({row['wall_s']:.0f} s)", flush=True)
+            lines = ["| plant friction | seed | fit | nominal [N·m] | after [N·m] | after / floor |", "|---|---|---|---|---|---|"]
+            lines += [f"| {r['law']} | {r['seed']} | {r['fit']} | {r['nominal']:.3f} | {r['after']:.3f} | "
+                      f"{r['ratio']:.2f}x |" for r in rows]
+            out.write_text(json.dumps(rows, indent=2, default=float))
+            out.with_suffix(".md").write_text("\n".join(lines) + f"\n\n{n_train}+{n_held} trajectories x {dur} s at 1 kHz\n")
+    return 0
+
+
 def run_sweep(args) -> int:
     from realm_ms.sysid.sweep import SWEEP_EFFECTS, CaseResult, judge, markdown, sweep
 
@@ -173,7 +219,11 @@ def main() -> int:
     ap.add_argument("--torque", action="store_true", help="time `auto` in torque space on MuJoCo-native torque logs")
     ap.add_argument("--torque-sweep", action="store_true", help="`auto` in torque space on every MuJoCo-native variant")
     ap.add_argument("--size", default="7,3,10", help="--torque-sweep: train,heldout,seconds per trajectory")
+    ap.add_argument("--friction-laws", action="store_true",
+                    help="torque-space fits of friction combinations on frictionloss / Gaz / LuGre plants")
     args = ap.parse_args()
+    if args.friction_laws:
+        return run_friction_laws(args)
     if args.sweep:
         return run_sweep(args)
     if args.torque_sweep:

@@ -129,13 +129,16 @@ class DroidIK:
 
     1. damped least squares  min ||J x - v||^2 + 1e-2 ||x||^2  (``regularization_weight``),
        subject to |x_i| <= 0.2 (``joint_velocity_limits``) and the joint-position-limit constraint
-       0.95 (q_lo + 0.3 - q) / dt <= x <= 0.95 (q_hi - 0.3 - q) / dt (dt = 1/15, as DROID configures
-       it, although the result is then applied as a whole-step delta); an active-set solve;
+       -0.95 (q - q_lo - 0.3) / dt <= x <= 0.95 (q_hi - 0.3 - q) / dt (dt = 1/15, as DROID configures
+       it, although the result is then applied as a whole-step delta), where a joint already inside
+       the 0.3 rad margin gets 0 as its bound toward the limit, never a push away from it
+       (dm_robotics ``JointPositionLimitConstraint::UpdateBounds``): the bounds always admit 0, so
+       the arm can always move away from a limit; an active-set solve;
     2. nullspace: toward x_ns = 0.025 (q_ref - q) / dt with q_ref = 0 (``nullspace_gain``,
        ``nullspace_joint_position_reference=[0]*7``) inside J's nullspace, shortened to stay in the
        bounds (the effector's second hierarchy keeps the first task's result, within its slack);
-    3. an infeasible bound set (a joint already inside the 0.3 rad margin by more than a step can
-       undo) makes the effector return zeros (it catches the solver's exception): same here.
+    3. where the solve fails the effector returns zeros (it catches the solver's exception): same
+       here for a non-finite solution.
 
     The result is a joint delta in rad; ``RobotIKSolver.cartesian_velocity_to_joint_velocity``
     returns it divided by 0.2 (``joint_delta_to_velocity``) and ``create_action_dict`` applies
@@ -163,9 +166,12 @@ class DroidIK:
 
     def bounds(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dt = 1.0 / CONTROL_HZ
-        lo = np.maximum(-MAX_JOINT_DELTA, LIMIT_VELOCITY_SCALE * (Q_LIMITS[:, 0] + MIN_DISTANCE_FROM_LIMIT - q) / dt)
-        hi = np.minimum(MAX_JOINT_DELTA, LIMIT_VELOCITY_SCALE * (Q_LIMITS[:, 1] - MIN_DISTANCE_FROM_LIMIT - q) / dt)
-        return lo, hi
+        lo_lim, hi_lim = Q_LIMITS[:, 0] + MIN_DISTANCE_FROM_LIMIT, Q_LIMITS[:, 1] - MIN_DISTANCE_FROM_LIMIT
+        room = hi_lim > lo_lim
+        # inside the margin (distance <= 0): 0 toward the limit, as dm_robotics sets it
+        lo = np.where(room, -LIMIT_VELOCITY_SCALE * np.maximum(q - lo_lim, 0.0) / dt, 0.0)
+        hi = np.where(room, LIMIT_VELOCITY_SCALE * np.maximum(hi_lim - q, 0.0) / dt, 0.0)
+        return np.maximum(-MAX_JOINT_DELTA, lo), np.minimum(MAX_JOINT_DELTA, hi)
 
     def cartesian_delta_to_joint_delta(self, delta: np.ndarray, q: np.ndarray) -> np.ndarray:
         """(B, 6) Cartesian deltas (already scaled: <= 0.075 m / 0.15 rad) -> (B, 7) joint deltas."""
@@ -175,13 +181,12 @@ class DroidIK:
         out = np.zeros_like(q)
         for i in range(len(q)):
             lo, hi = self.bounds(q[i])
-            if np.any(lo > hi + 1e-12):
-                continue  # infeasible: the effector returns zeros
             x = _bounded_dls(jac[i], delta[i], lo, hi, REGULARIZATION_WEIGHT)
             if self.nullspace:
                 x_ns = NULLSPACE_GAIN * (NULLSPACE_REFERENCE - q[i]) * CONTROL_HZ
                 x = _nullspace_step(jac[i], x, x_ns, lo, hi)
-            out[i] = x
+            if np.all(np.isfinite(x)):  # a failed solve: the effector returns zeros
+                out[i] = x
         return out
 
 

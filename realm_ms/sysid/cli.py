@@ -364,7 +364,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "law at 1 kHz in MuJoCo; needs `pip install mujoco`); mujoco-native: that law on a plant "
                         "whose effects are MuJoCo's own (--hidden frictionloss=0.3,payload_mass=0.8,"
                         "payload_com_x=0.12,... or a variant name: none, frictionloss, damping, armature, payload_com, "
-                        "link4_mass, springs, frictionloss+payload_com), with a joint-torque sensor (tau)")
+                        "link4_mass, springs, frictionloss+payload_com, gaz, lugre), with a joint-torque sensor (tau)")
     s.add_argument("--torque-only", action="store_true",
                    help="mujoco-native: write t, q, qd, tau without q_cmd (a torque log; default rate 1 kHz)")
     s.add_argument("--noise-torque", type=non_negative("N·m"), default=0.02,

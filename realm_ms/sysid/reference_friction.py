@@ -32,7 +32,8 @@ GAZ_PHI = np.array([
 
 def gaz_friction(qd: np.ndarray, scale: float = 1.0, phi: np.ndarray = GAZ_PHI) -> np.ndarray:
     p1, p2, p3 = phi[:, 0] * scale, phi[:, 1], phi[:, 2]
-    return p1 / (1 + np.exp(-p2 * (qd + p3))) - p1 / (1 + np.exp(-p2 * p3))
+    sig = lambda x: 0.5 * (1 + np.tanh(0.5 * x))  # noqa: E731 - 1 / (1 + exp(-x)) without overflow
+    return p1 * sig(p2 * (qd + p3)) - p1 * sig(p2 * p3)
 
 
 class LuGre:

@@ -85,7 +85,8 @@ class Effect(ActuationStage):
                 )
         for i, p in enumerate(self.params):
             lo, hi = p.spec.lo, p.spec.hi
-            if not lo <= float(row[i]) <= hi:
+            # theta is float32: a value at a bound (0.005) is stored just outside it (0.0049999999)
+            if not float(np.float32(lo)) <= float(row[i]) <= float(np.float32(hi)):
                 raise ValueError(f"{p.key} = {float(row[i]):g} {p.unit} is outside its bounds [{lo:g}, {hi:g}]")
         self.theta = row[None]
         self._rows_cache = None

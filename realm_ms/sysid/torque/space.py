@@ -122,8 +122,8 @@ def _pack(terms: list[Term]):
 
 
 def _set(keys, x):
-    for (t, k, _), v in zip(keys, x):
-        t.values[k] = float(v)
+    for (t, k, sp), v in zip(keys, x):  # clipped: lo + u (hi - lo) at u = 0 can round just below lo
+        t.values[k] = float(min(max(v, sp.lo), sp.hi))
 
 
 def predict(terms: list[Term], s: Samples, n: int) -> np.ndarray:
