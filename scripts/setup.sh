@@ -62,6 +62,16 @@ install_vulkan() {
   log "installed lavapipe $(lavapipe_version)"
 }
 
+# pip's own chatter (index warnings of the machine's pip config, setuptools' editable-install notice)
+# goes to .venv/pip-install.log; a failing install prints its tail and stops
+quiet_pip() {
+  if ! .venv/bin/python -m pip install -q "$@" >>.venv/pip-install.log 2>&1; then
+    tail -n 40 .venv/pip-install.log >&2
+    echo "ERROR: pip install $* failed; the whole log is .venv/pip-install.log" >&2
+    exit 1
+  fi
+}
+
 install_venv() {
   stamp=.venv/.realm-ms-stamp
   want=$(cat pyproject.toml scripts/setup.sh lerobot_env_realm/_distribution/pyproject.toml | sha256sum | cut -c1-16)
@@ -75,13 +85,13 @@ install_venv() {
   fi
   log "installing realm-ms and its dependencies (first time: several minutes)"
   .venv/bin/python -m pip install -q --upgrade pip >/dev/null 2>&1 || true
-  .venv/bin/python -m pip install -q -e ".[dev]"
+  quiet_pip -e ".[dev]"
   # metadata-only distribution named lerobot_env_*: LeRobot auto-imports such distributions, which
   # registers the `realm` env type for `lerobot-eval --env.type=realm` (docs/lerobot.md)
-  .venv/bin/python -m pip install -q --no-deps ./lerobot_env_realm/_distribution
+  quiet_pip --no-deps ./lerobot_env_realm/_distribution
   # the wire-compatibility tests of our openpi client talk to the reference client; it pins numpy<2
   # for its own extras only, so it is installed without its dependencies
-  .venv/bin/python -m pip install -q --no-deps "openpi-client==0.1.2"
+  quiet_pip --no-deps "openpi-client==0.1.2"
   echo "$want" > "$stamp"
 }
 
