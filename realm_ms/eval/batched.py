@@ -227,7 +227,7 @@ class BatchedBackend(Backend):
         if g.env_policy is None:
             from realm_ms.eval.policies import make_policy
 
-            g.env_policy = make_policy(self.cfg.policy).make_env_policy(g.env.unwrapped)
+            g.env_policy = make_policy(self.cfg.policy).bind_env_policy(g.env.unwrapped)
         elif whole:
             g.env_policy.reset()
         else:

@@ -128,7 +128,7 @@ class EpisodeRunner:
             if self.env_policy is None:
                 from realm_ms.eval.policies import make_policy
 
-                self.env_policy = make_policy(self.cfg.policy).make_env_policy(u)
+                self.env_policy = make_policy(self.cfg.policy).bind_env_policy(u)
             else:
                 self.env_policy.reset()
         self.obs = obs

@@ -89,7 +89,7 @@ def make_export_policy(spec: str, env, replan_every: int = 8):
 
     policy = make_policy(spec)
     if policy.env_side:
-        return policy.make_env_policy(env.unwrapped)
+        return policy.bind_env_policy(env.unwrapped)
     return ChunkedPolicy(policy, env, replan_every)
 
 

@@ -10,7 +10,7 @@ class ExpertPolicy(Policy):
     name = "expert"
     env_side = True
 
-    def make_env_policy(self, env):
+    def bind_env_policy(self, env):
         from realm_ms.expert import make_expert
 
         return make_expert(env)

@@ -7,7 +7,7 @@ A policy sees a *batch* of observations (one row per active episode slot) and re
 number of simulation workers.
 
 Privileged policies (the scripted expert) cannot run from observations: they set ``env_side`` and
-are built inside the process that owns the env via ``make_env_policy(env)``.
+are built inside the process that owns the env via ``bind_env_policy(env)``.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ class PolicyError(RuntimeError):
 
 
 class Policy:
-    """Base class; subclasses set ``name`` and implement ``act`` (or ``make_env_policy`` if env-side)."""
+    """Base class; subclasses set ``name`` and implement ``act`` (or ``bind_env_policy`` if env-side)."""
 
     name: str = "policy"
     env_side: bool = False  # privileged: runs next to the env instead of from observations
@@ -69,7 +69,7 @@ class Policy:
     def act(self, batch: PolicyInput) -> PolicyOutput:
         raise NotImplementedError
 
-    def make_env_policy(self, env):
+    def bind_env_policy(self, env):
         """Env-side policies: an object with ``reset()`` and ``act(obs) -> (num_envs, 8)``."""
         raise NotImplementedError(f"{self.name} is not an env-side policy")
 
