@@ -242,24 +242,17 @@ def _fit(args) -> int:
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                     generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
                     refit=not args.no_refit, space=args.space)
-    names = [f"J{i}" for i in range(1, 8)]
     print(f"fitted {', '.join(f['effects'])} -> {args.out}")
-    if f.get("unit") == "N·m":
-        for k, v in f["params"].items():
-            print(f"  {k:<32} {v:.5g}")
-        for when in ("before", "after"):
-            m = f[when]
-            print(f"{when:<6} held-out [N·m] " + " ".join(f"{v:9.3f}" for v in m["per_joint_heldout_rmse_nm"])
-                  + f"  {m['heldout_rmse_nm']:9.3f}   (train {m['train_rmse_nm']:.3f})")
-        _write_json(args.json, f)
-        return 0
+    torque = f.get("unit") == "N·m"  # torque space reports N·m (and its params carry no unit table)
+    unit, key, fmt, train_fmt = ("N·m", "nm", "9.3f", ".3f") if torque else ("rad", "rad", "9.2e", ".2e")
     for k, v in f["params"].items():
-        print(f"  {k:<32} {v:.5g} {f['units'][k]}   bounds {f['bounds'][k]}")
-    print("                     " + " ".join(f"{n:>9}" for n in names) + "      all")
+        print(f"  {k:<32} {v:.5g}" + ("" if torque else f" {f['units'][k]}   bounds {f['bounds'][k]}"))
+    if not torque:
+        print("                     " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)) + "      all")
     for when in ("before", "after"):
         m = f[when]
-        print(f"{when:<6} held-out [rad] " + " ".join(f"{v:9.2e}" for v in m["per_joint_heldout_rmse_rad"])
-              + f"  {m['heldout_rmse_rad']:9.2e}   (train {m['train_rmse_rad']:.2e})")
+        print(f"{when:<6} held-out [{unit}] " + " ".join(format(v, fmt) for v in m[f"per_joint_heldout_rmse_{key}"])
+              + f"  {format(m[f'heldout_rmse_{key}'], fmt)}   (train {format(m[f'train_rmse_{key}'], train_fmt)})")
     _write_json(args.json, f)
     return 0
 
