@@ -21,7 +21,7 @@ from dataclasses import replace
 import numpy as np
 
 from realm_ms.tasks.perturbation import Perturbation
-from realm_ms.perturbations.common import WIDE_REGION, catalog_extents, main_noun, object_spec, set_query, target_noun, widened, with_object
+from realm_ms.perturbations.common import WIDE_REGION, CatalogTooSmall, catalog_extents, main_noun, object_spec, set_query, target_noun, widened, with_object
 from realm_ms.tasks.progression import Thresholds
 from realm_ms.tasks.skills import as_skill
 from realm_ms.tasks.task_spec import SceneObject
@@ -65,7 +65,10 @@ def fitting_receiver(rng, verb: str, main_ext) -> tuple[str, tuple[float, float,
         if receiver_fits(verb, main_ext, ext):
             by_cat.setdefault(object_spec(oid).category, []).append((oid, scale))
     if not by_cat:
-        raise RuntimeError(f"SB-VRB: no {'/'.join(cats)} in the catalog fits an object of extents {np.round(main_ext, 3).tolist()} m for '{verb}'")
+        raise CatalogTooSmall(f"SB-VRB: no {'/'.join(cats)} in the object catalog fits an object of extents "
+                              f"{np.round(main_ext, 3).tolist()} m for '{verb}' (max extent {RECEIVER_MAX} m); add such "
+                              "receivers to the catalog's source meshes, or build the procedural set, which has them: "
+                              "`realm assets build --source procedural --out CATALOG`")
     pool = by_cat[sorted(by_cat)[int(rng.integers(len(by_cat)))]]
     return pool[int(rng.integers(len(pool)))]
 
