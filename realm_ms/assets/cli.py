@@ -9,7 +9,7 @@ from pathlib import Path
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     from asset_pipeline.sources import DEFAULT_SOURCES, SOURCES
-    from realm_ms.validate import forbid_repeats, integer, positive
+    from realm_ms.validate import integer, positive
 
     p = subparsers.add_parser("assets", help="build and inspect the object catalog", description=__doc__)
     sub = p.add_subparsers(dest="assets_cmd", metavar="VERB")
@@ -51,7 +51,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="contact sheet path (default: CATALOG/contact_sheet.png)")
     s.add_argument("--no-sheet", action="store_true", help="skip the contact sheet")
     s.set_defaults(func=_stats)
-    forbid_repeats(p)  # --source accumulates (append); --out, --workers, ... given twice are errors
 
 
 def _build(args: argparse.Namespace) -> int:

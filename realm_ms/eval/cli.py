@@ -27,7 +27,7 @@ def add_parser(sub) -> None:
     p.add_argument("--tasks", nargs="+", help="env ids, or 'all' (default: the protocol's)")
     p.add_argument("--perturbations", nargs="+", help="names (e.g. Default V-AUG), or 'all' (default: the protocol's)")
     p.add_argument("--episodes", type=int, help="episodes per (task, perturbation) cell (REALM: 25)")
-    from realm_ms.validate import forbid_repeats, integer, positive, seed
+    from realm_ms.validate import integer, positive, seed
 
     p.add_argument("--seed", type=seed(), help="base seed, an integer in [0, 2**32); episode i uses seed + i (REALM: 1234)")
     p.add_argument("--max-steps", type=int, help="control steps per episode (REALM: 800)")
@@ -60,7 +60,6 @@ def add_parser(sub) -> None:
     r.add_argument("--videos", dest="report_videos", choices=("none", "failures", "all"), default="failures", help="which episode videos to link")
     r.add_argument("--reference", default=None, help="also tabulate REALM's paper numbers for a policy (pi0, pi0-FAST, GR00T)")
     p.set_defaults(func=run)
-    forbid_repeats(p)  # `--seed 1 --seed 2` is an error, `--tasks A --tasks B` accumulates
 
 
 def _parse_size(text: str | None) -> tuple[int, int] | None:

@@ -180,9 +180,6 @@ def add_parser(sub) -> None:
     p.add_argument("paired", type=Path, help="CSV with columns policy,task,real,sim")
     p.add_argument("--json", type=Path, default=None, help="also write the result as JSON here (a file path)")
     p.add_argument("--percent", action="store_true", help="real/sim are percentages (0-100); default: rates in [0, 1]")
-    from realm_ms.validate import forbid_repeats
-
-    forbid_repeats(p)
     p.set_defaults(func=run)
 
 

@@ -21,7 +21,7 @@ def add_parser(sub) -> None:
     p.add_argument("--policy", default="expert", help="policy that acts (default: expert, the privileged scripted expert)")
     p.add_argument("--tasks", nargs="+", metavar="ID", help="REALM env ids, or 'all'")
     p.add_argument("--perturbations", nargs="+", default=[DEFAULT], metavar="NAME", help=f"perturbation names (default: {DEFAULT})")
-    from realm_ms.validate import forbid_repeats, seed
+    from realm_ms.validate import seed
 
     p.add_argument("--episodes", type=int, help="episodes per (task, perturbation), >= 1")
     p.add_argument("--seed", type=seed(), default=0, help="episode k of each (task, perturbation) uses seed + k; in [0, 2**32)")
@@ -39,7 +39,6 @@ def add_parser(sub) -> None:
                    help="re-simulate the episodes of a `realm eval` run (its records.jsonl) instead of --tasks")
     p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes, >= 1 (resume granularity)")
     p.set_defaults(func=run)
-    forbid_repeats(p)  # a single-valued flag given twice is an error; --tasks/--perturbations accumulate
 
 
 def run(args) -> int:

@@ -29,8 +29,7 @@ from realm_ms.tasks.perturbation import PERTURBATIONS, DrawContext, Perturbation
 from realm_ms.tasks.perturbation_set import PerturbationSet
 
 for _cls in (Default, VAug, VView, VSc, VLight, SProp, SLang, SMo, SAff, SInt, BHobj, SbNoun, SbVrb, VBPose, VBMobj, VsbNobj):
-    if _cls.name not in PERTURBATIONS:  # a re-import (importlib.reload) keeps the registry as it is
-        register_perturbation(_cls)
+    register_perturbation(_cls)
 
 
 def all_perturbations() -> list[Perturbation]:

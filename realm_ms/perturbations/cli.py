@@ -20,7 +20,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     sh = sub.add_parser("sheet", help="one image per perturbation (exterior + wrist camera) for a task")
     sh.add_argument("--task", action="append", required=True, help="env id (repeat for several; 'all' for every task)")
     from realm_ms.rendering import SHADERS  # the one shader table
-    from realm_ms.validate import forbid_repeats, integer, seed
+    from realm_ms.validate import integer, seed
 
     sh.add_argument("--out", required=True, help="PNG (or JPEG) path (with several tasks: one file per task, the id appended)")
     sh.add_argument("--seed", type=seed(), default=0, help="seed of the perturbation draws, an integer in [0, 2**32) (default 0)")
@@ -29,7 +29,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     sh.add_argument("--shader", default="default", choices=SHADERS,
                     help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
     sh.set_defaults(func=_sheet)
-    forbid_repeats(sh)  # --task accumulates (action="append"); --out, --seed, ... given twice are errors
     p.set_defaults(func=lambda a: (p.print_help(), 2)[1])
 
 
