@@ -258,6 +258,35 @@ def test_rows_of_a_finished_slot_hold_and_whole_batch_waves():
     assert all(torch.equal(a[2], torch.full((8,), 3.0)) for a in wave2)  # the idle row holds its reset state
 
 
+def test_one_slot_runner_and_sub_env_slots_give_the_same_records():
+    """``EpisodeRunner`` (the engine's one-slot case) and three sub-envs of one batched env run the
+    same keys to the same records (but for wall time and the env config's ``num_envs``)."""
+    from realm_ms.eval.slots import EpisodeRunner
+    from realm_ms.eval.workers import InlineBackend
+
+    cfg = RunConfig(policy="zero", max_steps=8, replan_every=3, success_tail=TAIL, quality=False, obs=ObsRequest(cameras=("wrist",), width=4, height=2))
+
+    def factory(task, perturbation, run_cfg):
+        return StandInEnv(task, perturbation, run_cfg, run_cfg.env_kwargs.get("num_envs", 1))
+
+    def run(backend):
+        recs = []
+        try:
+            run_plan(plan(["REALM-A", "REALM-B"], ["Default"], 4, seed=20), ZeroPolicy(), backend, recs.append, progress_bar=False, replan_every=3)
+        finally:
+            backend.close()
+        for r in recs:
+            r.pop("wall_s")
+            r["config"].pop("num_envs", None), r["config"].pop("sim_backend", None)
+        return {(r["task"], r["seed"]): r for r in recs}
+
+    inline = InlineBackend(cfg, 1)
+    inline.runners = [EpisodeRunner(cfg, env_factory=factory)]
+    one, batched = run(inline), run(BatchedBackend(cfg, num_envs=3, sim_backend="physx_cuda", env_factory=factory))
+    assert len(one) == 8 and one == batched
+    assert {r["steps"] for r in one.values()} == {min(_goal(s) + TAIL, 8) for s in range(20, 24)}
+
+
 def test_policy_errors_fail_their_slot_and_unsupported_cells_are_recorded():
     from realm_ms.eval.policies.policy import PolicyOutput
 

@@ -10,7 +10,8 @@ from mani_skill.envs.sapien_env import BaseEnv
 
 from realm_ms.eval.policies.policy import ObsRequest
 from realm_ms.eval.protocol import EpisodeKey
-from realm_ms.eval.runner import EpisodeRunner, RunConfig
+from realm_ms.eval.runner import RunConfig
+from realm_ms.eval.slots import EpisodeRunner
 
 TASK, CHUNK, CHUNKS = "REALM-PickApple-v1", 4, 3
 

@@ -4,7 +4,8 @@ Layout (one concept per module):
 
 - ``policies/``: the policy interface and registry (expert, zero, random, lerobot, openpi);
 - ``protocol.py``: presets (``realm``, ``quick``) and the episode plan ((task, perturbation, seed) keys);
-- ``runner.py``: THE episode loop (env side) and the driver that batches the policy over slots;
+- ``slots.py``: a cell's env on the episode engine (``tasks.episode``), ``EpisodeRunner`` its one-slot case;
+- ``runner.py``: run settings, the record schema and the driver that batches the policy over slots;
 - ``workers.py``: execution backends (in-process, N CPU worker processes with shared-memory
   observations, ManiSkill GPU simulation where SAPIEN's GPU PhysX exists, Ray sharding);
 - ``records.py``: append-only JSONL records, resume; ``quality.py``: trajectory quality;

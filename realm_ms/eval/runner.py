@@ -1,15 +1,13 @@
-"""THE episode loop, and the driver that runs a plan of episodes through it.
+"""What a ``realm eval`` run is made of, and the driver that runs a plan of episodes.
 
-``EpisodeRunner`` owns one env (num_envs = 1, CPU physics) in whichever process steps it: it resets
-to an ``EpisodeKey`` (building the env for that task and perturbation, reused while they stay the
-same), executes action chunks open-loop (or asks an env-side policy such as the scripted expert
-every step), tracks stage latches, progression and trajectory quality, writes optional videos, and
-returns one record per finished episode. The expert bench, ``realm demo`` and ``realm eval`` all
-run episodes through it.
+``RunConfig`` holds the env-side settings of a run; ``cell_config`` / ``build_cell_env`` describe
+and build the env of a (task, perturbation) cell through ``tasks.make_env``; ``episode_record`` is
+the one record schema every backend writes (the episodes themselves run on the episode engine,
+``tasks.episode``, through ``slots.CellSlots``: ``EpisodeRunner`` is its one-slot case).
 
 ``run_plan`` is the driver: it keeps every slot of a backend busy (``workers.py``: in-process, N
-worker processes, Ray), calls the policy once per round on the batch of slots that need actions,
-appends each finished record atomically, and shows a live progress bar.
+worker processes, Ray; ``batched.py``), calls the policy once per round on the batch of slots that
+need actions, appends each finished record atomically, and shows a live progress bar.
 """
 
 from __future__ import annotations
@@ -74,138 +72,6 @@ def build_cell_env(task: str, perturbation: str, cfg: RunConfig):
     return make_env(config, **rest)
 
 
-class EpisodeRunner:
-    """Runs episodes of any (task, perturbation, seed) on one env; see the module docstring."""
-
-    def __init__(self, cfg: RunConfig):
-        self.cfg = cfg
-        self.env = None
-        self.cell: tuple[str, str] | None = None
-        self.env_policy = None
-        self.key: EpisodeKey | None = None
-
-    # ------------------------------------------------------------------ env lifecycle
-    def _ensure_env(self, key: EpisodeKey) -> None:
-        if self.cell == key.cell() and self.env is not None:
-            return
-        self.close()
-        self.env = build_cell_env(key.task, key.perturbation, self.cfg)
-        self.cell = key.cell()
-        self.env_policy = None
-
-    def close(self) -> None:
-        if self.env is not None:
-            self.env.close()
-        self.env, self.cell, self.env_policy = None, None, None
-
-    # ------------------------------------------------------------------ observations
-    def observation(self, obs) -> dict:
-        """Numpy view of what the policy needs: ``state`` (8,), ``images[cam]`` (H, W, 3) uint8."""
-        u = self.env.unwrapped
-        out = {"state": u.agent.droid_state()[0].detach().cpu().numpy().astype(np.float32), "images": {}}
-        for cam in self.cfg.obs.cameras:
-            out["images"][cam] = obs["sensor_data"][cam]["rgb"][0].detach().cpu().numpy()
-        out["instruction"] = self.instruction
-        out["steps"] = self.steps
-        return out
-
-    # ------------------------------------------------------------------ episodes
-    def start(self, key: EpisodeKey) -> dict:
-        """Reset to ``key``; returns the first observation (see ``observation``)."""
-        import torch
-
-        try:
-            self._ensure_env(key)
-        except NotImplementedError as e:  # a cell the perturbation does not support (REALM: 9 of 160)
-            self.key, self.unsupported = key, str(e) or "unsupported"
-            return {"unsupported": self.unsupported}
-        self.unsupported = None
-        self.key = key
-        self.t0 = time.perf_counter()
-        obs, info = self.env.reset(seed=key.seed)
-        u = self.env.unwrapped
-        if self.cfg.env_side:
-            if self.env_policy is None:
-                from realm_ms.eval.policies import make_policy
-
-                self.env_policy = make_policy(self.cfg.policy).bind_env_policy(u)
-            else:
-                self.env_policy.reset()
-        self.obs = obs
-        self.instruction = u.get_language_instruction()[0]
-        self.perturbation_info = jsonable(info.get("perturbation", {"name": DEFAULT, "params": {}} if key.perturbation == DEFAULT else {}))
-        self.stages = [s.value for s in u.tracker.stages]
-        self.latched: dict[str, int | None] = {s: None for s in self.stages}
-        self.best, self.rises, self.steps = 0.0, [], 0
-        self.info = {"success": torch.zeros(1, dtype=torch.bool)}
-        self.quality = None
-        if self.cfg.quality:
-            from realm_ms.eval.quality import TrajectoryQuality
-
-            self.quality = TrajectoryQuality(self.env)
-        self.frames: list[np.ndarray] = []
-        self._frame(obs)
-        return self.observation(obs)
-
-    def _frame(self, obs) -> None:
-        if self.cfg.videos == "none":
-            return
-        cams = [obs["sensor_data"][c]["rgb"][0].detach().cpu().numpy() for c in VIDEO_CAMERAS]
-        h = min(c.shape[0] for c in cams)
-        self.frames.append(np.concatenate([c[:h] for c in cams], axis=1))
-
-    def step(self, actions: np.ndarray | None = None, n: int | None = None) -> tuple[dict | None, dict | None]:
-        """Execute ``actions`` (T, 8) open-loop, at most ``n`` of them (default ``replan_every``), or
-        ``n`` env-side policy steps. Returns (observation, None) or (None, record) when finished."""
-        import torch
-
-        if getattr(self, "unsupported", None):
-            return None, self._unsupported_record()
-        env, u = self.env, self.env.unwrapped
-        n = n or self.cfg.replan_every
-        if actions is not None:
-            n = min(n, len(actions))
-        done = False
-        # An open-loop chunk is looked at only after its last action: the steps before it need no
-        # camera capture (unless every frame goes into a video, or an env-side policy reads obs).
-        sparse = actions is not None and self.cfg.videos == "none"
-        for i in range(n):
-            if actions is not None:
-                a = torch.as_tensor(np.asarray(actions[i], dtype=np.float32))[None]
-            else:
-                a = self.env_policy.act(self.obs)
-            u.capture_sensors = not sparse or i == n - 1
-            try:
-                self.obs, _, term, trunc, info = env.step(a)
-            finally:
-                u.capture_sensors = True
-            self.info = info
-            advance_episode(self, float(info["progression"][0]), [bool(info[f"stage_{s.lower()}"][0]) for s in self.stages])
-            if self.quality is not None:
-                self.quality.update()
-            self._frame(self.obs)
-            script_over = actions is None and bool(getattr(self.env_policy, "done", [False])[0])
-            if bool(term[0]) or bool(trunc[0]) or self.steps >= self.cfg.max_steps or script_over:
-                done = True
-                break
-        if done:
-            return None, self._record("ok")
-        return self.observation(self.obs), None
-
-    def abort(self, error: str) -> dict:
-        """End the current episode as failed by the policy side (e.g. its server stayed down)."""
-        return self._record("error", error)
-
-    # ------------------------------------------------------------------ records
-    def _unsupported_record(self) -> dict:
-        return unsupported_record(self.cfg, self.key, self.unsupported)
-
-    def _record(self, status: str, error: str | None = None) -> dict:
-        u = self.env.unwrapped
-        return episode_record(self.cfg, self, status, skill=u.task_spec.skill, success=bool(self.info["success"][0]),
-                              stalled=u.stalled_stage()[0], error=error)
-
-
 # ---------------------------------------------------------------------------------------- records
 def _base_record(cfg: RunConfig, key: EpisodeKey) -> dict:
     from realm_ms.agents.droid_action_spaces import action_space_name
@@ -214,28 +80,15 @@ def _base_record(cfg: RunConfig, key: EpisodeKey) -> dict:
                 config=cell_config(key.task, key.perturbation, cfg)[0].to_dict())
 
 
-def advance_episode(ep, progression: float, stage_hits) -> None:
-    """One env step of an episode's bookkeeping (``ep`` as for ``episode_record``, with ``stages``):
-    the step count, the best progression and the steps where it rose, the first step of each stage."""
-    ep.steps += 1
-    if progression > ep.best + 1e-9:
-        ep.best = progression
-        ep.rises.append(ep.steps)
-    for st, hit in zip(ep.stages, stage_hits):
-        if ep.latched[st] is None and hit:
-            ep.latched[st] = ep.steps
-
-
 def unsupported_record(cfg: RunConfig, key: EpisodeKey, why: str) -> dict:
     """The record of a cell the perturbation does not support (REALM: 9 of 160)."""
     return _base_record(cfg, key) | dict(status="unsupported", error=why, success=False, progression=0.0, steps=0)
 
 
 def episode_record(cfg: RunConfig, ep, status: str, skill, success: bool, stalled: str, error: str | None = None) -> dict:
-    """One finished episode's record, the schema every backend writes. ``ep`` holds the episode's
-    bookkeeping (``key``, ``perturbation_info``, ``instruction``, ``best``, ``rises``, ``latched``,
-    ``steps``, ``t0``, ``quality``, ``frames``); its frames are written to a video as ``cfg.videos``
-    says, then dropped."""
+    """One finished episode's record, the schema every backend writes. ``ep``: a ``slots.SlotEpisode``
+    (the engine's bookkeeping with its key, quality and frames); its frames are written to a video
+    as ``cfg.videos`` says, then dropped."""
     rec = _base_record(cfg, ep.key) | dict(
         status=status,
         perturbation_params=ep.perturbation_info,
@@ -249,7 +102,7 @@ def episode_record(cfg: RunConfig, ep, status: str, skill, success: bool, stalle
         steps=ep.steps,
         max_steps=cfg.max_steps,
         replan_every=cfg.replan_every,
-        wall_s=round(time.perf_counter() - ep.t0, 3),
+        wall_s=round(ep.wall_s(), 3),
         quality=ep.quality.summary() if ep.quality is not None else None,
         code_version=code_version(),  # package version + git revision: provenance for report headers
     )
@@ -373,4 +226,4 @@ def default_workers() -> int:
     return max(1, min(os.cpu_count() or 1, 16))
 
 
-__all__ = ["RunConfig", "EpisodeRunner", "run_plan", "build_cell_env", "cell_config", "Progress", "default_workers"]
+__all__ = ["RunConfig", "run_plan", "build_cell_env", "cell_config", "Progress", "default_workers"]

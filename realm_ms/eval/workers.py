@@ -29,7 +29,8 @@ import numpy as np
 
 from realm_ms.eval.protocol import EpisodeKey
 from realm_ms.eval.backend import Backend
-from realm_ms.eval.runner import EpisodeRunner, RunConfig
+from realm_ms.eval.runner import RunConfig
+from realm_ms.eval.slots import EpisodeRunner
 from realm_ms.registry import Registry
 
 

@@ -60,6 +60,22 @@ class Expert:
             self.gens.append(self.skill(c))
         self.done = [False] * n
 
+    def reset_rows(self, rows: list[int]) -> None:
+        """Restart the script for the sub-envs ``rows`` only (after a partial reset of those rows).
+
+        ``reset()`` restarts every row from the env's state; the other rows' per-row state (skill
+        generators, contexts, commanded joints, base poses, done flags) is put back afterwards."""
+        keep_lists = {a: list(getattr(self, a)) for a in ("ctxs", "gens", "done")}
+        keep_rows = {a: getattr(self, a).clone() for a in ("q_cmd", "base_p")}
+        self.reset()
+        others = [i for i in range(self.env.num_envs) if i not in set(rows)]
+        for a, old in keep_lists.items():
+            new = getattr(self, a)
+            for i in others:
+                new[i] = old[i]
+        for a, old in keep_rows.items():
+            getattr(self, a)[others] = old[others]
+
     def _next(self, i: int) -> Target:
         if not self.done[i]:
             try:
@@ -108,29 +124,19 @@ def start_episode(env, seed: int, expert: Expert | None = None) -> tuple:
 
 
 def run_episode(env, seed: int, max_steps: int | None = None, expert: Expert | None = None, on_step=None) -> dict:
-    """Reset ``env`` (num_envs = 1) with ``seed`` and run the expert until the episode ends.
-
-    A minimal helper for the expert's own tests (this layer sits below ``realm_ms.eval``): every
-    evaluation, the expert bench and ``realm demo`` run episodes through ``realm_ms.eval.runner``.
+    """Reset ``env`` (num_envs = 1) with ``seed`` and run the expert on the episode engine until the
+    episode ends (success + tail, truncation, ``max_steps`` (default: the task horizon), or the end
+    of the script); ``on_step(env, obs, info)`` after every step. ``expert``: one to reuse
+    (``reset()`` for the new episode), as the evaluation runner does.
 
     Returns ``dict(progression, success, stalled_stage, steps, log)``."""
-    obs, expert = start_episode(env, seed, expert)
-    u = env.unwrapped
-    horizon = max_steps or u.task_spec.horizon
-    best, steps, info = 0.0, 0, {}
-    for steps in range(1, horizon + 1):
-        obs, _, term, trunc, info = env.step(expert.act(obs))
-        if on_step is not None:
-            on_step(env, obs, info)
-        best = max(best, float(info["progression"][0]))
-        if bool(term[0]) or bool(trunc[0]):
-            break
-        if expert.done[0]:  # the script has ended (and held): nothing more will happen
-            break
-    return dict(
-        progression=best,
-        success=bool(info.get("success", torch.zeros(1))[0]),
-        stalled_stage=u.stalled_stage()[0],
-        steps=steps,
-        log=list(expert.ctxs[0].log),
-    )
+    from realm_ms.tasks.episode import Episode, EpisodeEngine
+
+    hook = None if on_step is None else (lambda step: on_step(env, step.obs, step.info))
+    engine = EpisodeEngine(env, actor=expert, after_step=hook)
+    ep = Episode(seed=seed, max_steps=max_steps or env.unwrapped.task_spec.horizon)
+    engine.reset({0: ep})
+    if engine.actor is None:  # built on the env after its reset
+        engine.actor = make_expert(env.unwrapped)
+    engine.run(ep.max_steps)
+    return dict(progression=ep.best, success=ep.success, stalled_stage=ep.stalled, steps=ep.steps, log=list(engine.actor.ctxs[0].log))
