@@ -35,9 +35,10 @@ bench-sysid: setup
 bench-eval: setup
 	$(PY) bench/eval_throughput.py
 
-# export expert demos -> lerobot-train a small ACT -> realm eval (Default + V-AUG) -> report
+# expert demos -> lerobot-train ACT -> realm eval (Default, 16 settings, worst) -> fine-tune -> reports;
+# about 2.5 h on 2 CPU cores, resumable; `make train-eval-demo ARGS=--quick` is the few-minute variant
 train-eval-demo: setup
-	$(PY) examples/train_eval_loop.py
+	$(PY) examples/train_eval_loop.py $(ARGS)
 
 # real-mesh sources for the full catalog; the --no-deps packages pin conflicting mujoco/numpy/trimesh
 # versions, and the pipeline only reads their files (never imports them): install them without deps

@@ -1,132 +1,413 @@
-"""Train-eval loop on REALM with LeRobot: expert demos -> `lerobot-train` -> `realm eval` -> report.
+"""A learned policy on REALM with LeRobot: expert demos -> `lerobot-train` -> `realm eval` -> fine-tune back.
 
-    .venv/bin/python examples/train_eval_loop.py [--out outputs/train_eval] [--task REALM-PickApple-v1]
-        [--episodes 2] [--steps 200] [--perturbation V-AUG] [--device cpu] [--smoke]
+    .venv/bin/python examples/train_eval_loop.py [--out outputs/train_eval] [--device cpu] [--quick]
 
-1. `realm export`: scripted-expert demonstrations of one task as a LeRobot v3.0 dataset (DROID features);
-2. `lerobot-train`: a small ACT policy (tiny transformer, ResNet-18 from scratch: nothing is
-   downloaded) on it, with LeRobot's in-training evaluation on the `realm` env type
-   (`--env.type=realm`, plugin `lerobot_env_realm`) at the end of training;
-3. `realm eval --policy lerobot:CHECKPOINT` under Default and one perturbation;
-4. `realm eval report`: prints the report path.
+Stages (each resumes: rerunning the same command skips finished work):
+1. demos      `realm export` of scripted-expert demonstrations, one dataset per task (tasks export in
+              parallel processes), seeds from 100000 so evaluation seeds (from 0) are never demo seeds;
+2. dataset    LeRobot's `aggregate_datasets` merges them into one training set;
+3. train      `lerobot-train` an ACT policy from scratch (nothing can be downloaded) on it; the loss
+              curve goes to `learning_curve.csv/.png`;
+4. default    `realm eval` of the checkpoint on Default (20 episodes per task, seeds 0-19);
+5. table      `realm eval` under all 16 REALM settings (5 episodes per cell; paper-layout table);
+6. worst      `realm eval` under the perturbation that hurt most (20 episodes per task);
+7. finetune   expert demos under that perturbation, merged with the original demos,
+              `lerobot-train --policy.path=CHECKPOINT` on them, and the evaluation of 4 and 6 for it;
+8. report     `realm eval report` of every run and an index with both policies side by side; the
+              final table (success with Wilson intervals, fine-tuning delta with Newcombe's interval)
+              on stdout and in `summary.json`.
 
-On CPU the defaults run end to end in a few minutes (no success is expected from 200 steps);
-`--smoke` is the CI variant (a handful of steps everywhere). Every stage resumes: the export skips
-episodes already written, the eval skips finished episodes; training reruns only if its checkpoint
-is missing.
+`--quick` is the CI variant: every stage with a handful of steps (no success expected).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 import os
+import re
+import shutil
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+DEMO_SEED = 100_000  # demos use seeds DEMO_SEED + k; evaluation uses seeds from 0
+FINETUNE_SEED = 200_000
 
 
-def parse(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("outputs/train_eval"))
-    ap.add_argument("--task", default="REALM-PickApple-v1")
-    ap.add_argument("--episodes", type=int, default=2, help="expert demonstrations to export")
-    ap.add_argument("--demo-steps", type=int, default=150, help="control steps per demonstration")
-    ap.add_argument("--steps", type=int, default=200, help="lerobot-train optimisation steps")
-    ap.add_argument("--batch-size", type=int, default=8)
-    ap.add_argument("--size", default="64x48", help="camera WxH for export, training and eval (CPU default; 320x180 = DROID)")
-    ap.add_argument("--perturbation", default="V-AUG", help="evaluated besides Default")
-    ap.add_argument("--eval-episodes", type=int, default=1, help="per (task, perturbation)")
-    ap.add_argument("--eval-steps", type=int, default=100, help="control steps per evaluation episode")
-    ap.add_argument("--device", default="cpu", help="cpu | cuda")
-    ap.add_argument("--threads", type=int, default=None,
-                    help="torch CPU threads for training (default 1 on CPU: on a busy 2-core machine 2 threads spin ~8x the CPU time)")
-    ap.add_argument("--smoke", action="store_true", help="CI: 1 short demo, 2 training steps, 1 short eval episode per cell")
-    args = ap.parse_args(argv)
-    if args.smoke:
-        args.episodes, args.demo_steps, args.steps, args.batch_size = 1, 10, 2, 4
-        args.size, args.eval_episodes, args.eval_steps = "64x48", 1, 5
-    args.width, args.height = (int(v) for v in args.size.lower().split("x"))
-    return args
+@dataclass
+class Recipe:
+    out: Path = Path("outputs/train_eval")
+    tasks: tuple[str, ...] = ("REALM-PickApple-v1", "REALM-OpenDrawer-v1")
+    demos: tuple[int, ...] = (60, 40)  # expert demonstrations per task
+    demo_max_steps: int = 200
+    success_only: bool = True  # keep successful demos only (further seeds replace failures)
+    width: int = 64
+    height: int = 48
+    # ACT trained from scratch, sized for ~1 h on 2 CPU cores
+    steps: int = 2000
+    batch_size: int = 16
+    lr: float = 1e-4
+    dim_model: int = 256
+    n_heads: int = 4
+    dim_feedforward: int = 1024
+    n_encoder_layers: int = 2
+    chunk_size: int = 20
+    n_action_steps: int = 10
+    save_freq: int = 1000
+    log_freq: int = 50
+    # evaluation
+    eval_episodes: int = 20
+    table_episodes: int = 5
+    table_perturbations: tuple[str, ...] = ("all",)
+    eval_max_steps: int = 200  # the demos' horizon
+    replan_every: int = 10
+    workers: int = 2
+    # fine-tuning under the perturbation that hurt most
+    finetune_demos: int = 15
+    finetune_steps: int = 800
+    device: str = "cpu"
+    threads: int | None = None
+
+    @classmethod
+    def quick(cls, **kw) -> Recipe:
+        return cls(tasks=("REALM-PickApple-v1",), demos=(1,), demo_max_steps=8, success_only=False, steps=2, batch_size=4, dim_model=32, n_heads=2, dim_feedforward=64,
+                   n_encoder_layers=1, chunk_size=4, n_action_steps=4, save_freq=2, log_freq=1, eval_episodes=1,
+                   table_episodes=1, table_perturbations=("Default", "V-AUG"), eval_max_steps=4, replan_every=4,
+                   workers=1, finetune_demos=1, finetune_steps=2, **kw)
+
+
+def short(task: str) -> str:
+    return task.removeprefix("REALM-").removesuffix("-v1")
 
 
 def stage(msg: str) -> None:
     print(f"\n=== {msg}", flush=True)
 
 
-def export(args) -> Path:
-    from realm_ms.lerobot.export import ExportConfig, export_dataset
-
-    root = args.out / "dataset"
-    stage(f"export {args.episodes} expert demonstration(s) of {args.task} -> {root}")
-    export_dataset(ExportConfig(out=root, tasks=[args.task], episodes=args.episodes, width=args.width, height=args.height,
-                                max_steps=args.demo_steps, repo_id="realm/train_eval_demos"))
-    return root
+def realm_command() -> list[str]:
+    """The installed `realm` script beside this interpreter (the command a user types)."""
+    script = Path(sys.executable).parent / "realm"
+    return [str(script)] if script.exists() else [sys.executable, "-m", "realm_ms.cli"]
 
 
-def train(args, dataset: Path) -> Path:
-    run = args.out / "train"
-    ckpt = run / "checkpoints" / "last" / "pretrained_model"
-    if (ckpt / "model.safetensors").exists():
-        stage(f"lerobot-train: checkpoint exists ({ckpt}), skipping")
-        return ckpt
-    stage(f"lerobot-train ACT (small) for {args.steps} steps on {args.device} -> {run}")
-    if run.exists():  # lerobot-train refuses an existing output dir without --resume
-        import shutil
-
-        shutil.rmtree(run)
-    cmd = [
-        sys.executable, "-m", "lerobot.scripts.lerobot_train",
-        "--dataset.repo_id=realm/train_eval_demos", f"--dataset.root={dataset}", "--dataset.video_backend=pyav",
-        "--policy.type=act", f"--policy.device={args.device}", "--policy.push_to_hub=false",
-        "--policy.pretrained_backbone_weights=null", "--policy.dim_model=64", "--policy.n_heads=2",
-        "--policy.dim_feedforward=128", "--policy.n_encoder_layers=1", "--policy.n_decoder_layers=1",
-        "--policy.n_vae_encoder_layers=1", "--policy.chunk_size=16", "--policy.n_action_steps=8",
-        f"--steps={args.steps}", f"--batch_size={args.batch_size}", "--num_workers=0", f"--save_freq={args.steps}",
-        f"--log_freq={max(1, args.steps // 10)}", f"--output_dir={run}", "--wandb.enable=false",
-        # LeRobot's own in-training evaluation on our env type, once at the end of training
-        "--env.type=realm", "--env.discover_packages_path=lerobot_env_realm", f"--env.task={args.task}",
-        f"--env.observation_width={args.width}", f"--env.observation_height={args.height}",
-        f"--env.episode_length={args.eval_steps}", f"--env_eval_freq={args.steps}", "--eval.n_episodes=1",
-        "--eval.batch_size=1", "--eval.use_async_envs=false",
-    ]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    threads = args.threads or (1 if args.device == "cpu" else None)
+def child_env(threads: int | None = 1) -> dict:
+    """Environment of the child commands; ``threads``: torch CPU threads (1 for env processes, which
+    run side by side; all cores for training)."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+               MS_SKIP_ASSET_DOWNLOAD_PROMPT="1")
     if threads:
         env["OMP_NUM_THREADS"] = str(threads)
-    subprocess.run(cmd, check=True, cwd=ROOT, env=env)
+    return env
+
+
+# ---------------------------------------------------------------- demos and dataset
+
+
+def kept_episodes(root: Path) -> int:
+    side = root / "meta" / "realm_episodes.jsonl"
+    if not side.exists():
+        return 0
+    return sum(1 for line in side.read_text().splitlines() if line.strip() and json.loads(line).get("kept"))
+
+
+def export_demos(r: Recipe, jobs: list[tuple[str, str, int, int, Path]]) -> list[Path]:
+    """Expert demos, one `realm export` process per (task, perturbation, episodes, seed, root), in parallel;
+    a progress bar over the kept episodes of all of them."""
+    from tqdm import tqdm
+
+    procs = []
+    for task, pert, n, seed, root in jobs:
+        root.parent.mkdir(parents=True, exist_ok=True)
+        cmd = realm_command() + [
+            "export", "--tasks", task, "--perturbations", pert, "--episodes", str(n), "--seed", str(seed),
+            "--width", str(r.width), "--height", str(r.height), "--max-steps", str(r.demo_max_steps),
+            "--out", str(root), "--repo-id", f"realm/{root.name}"] + (["--success-only"] if r.success_only else [])
+        log = open(root.parent / f"{root.name}.log", "a")
+        procs.append((subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=child_env(), cwd=ROOT), log, root))
+    total = sum(j[2] for j in jobs)
+    with tqdm(total=total, desc="expert demos", unit="ep") as bar:
+        while True:
+            done = [p.poll() is not None for p, _, _ in procs]
+            bar.n = min(total, sum(kept_episodes(root) for _, _, root in procs))
+            bar.refresh()
+            if all(done):
+                break
+            time.sleep(2)
+    for p, log, root in procs:
+        log.close()
+        if p.returncode != 0:
+            raise SystemExit(f"realm export into {root} failed (exit {p.returncode}); see {root.parent / (root.name + '.log')}")
+    return [j[4] for j in jobs]
+
+
+def merge(roots: list[Path], out: Path, repo_id: str) -> Path:
+    """One training set from several exports (LeRobot's own aggregation); redone when a source grew."""
+    from lerobot.datasets.aggregate import aggregate_datasets
+
+    want = sum(json.loads((s / "meta" / "info.json").read_text())["total_episodes"] for s in roots)
+    info = out / "meta" / "info.json"
+    if info.exists() and json.loads(info.read_text())["total_episodes"] == want:
+        return out
+    shutil.rmtree(out, ignore_errors=True)
+    aggregate_datasets([f"realm/{s.name}" for s in roots], repo_id, roots=roots, aggr_root=out)
+    return out
+
+
+# ---------------------------------------------------------------- training
+
+
+def checkpoint_step(run: Path) -> int:
+    f = run / "checkpoints" / "last" / "training_state" / "training_step.json"
+    return json.loads(f.read_text())["step"] if f.exists() else 0
+
+
+def train(r: Recipe, dataset: Path, run: Path, steps: int, init: Path | None = None) -> Path:
+    """`lerobot-train` ACT on ``dataset`` (from ``init`` when fine-tuning); resumes an interrupted run."""
+    from tqdm import tqdm
+
+    ckpt = run / "checkpoints" / "last" / "pretrained_model"
+    done = checkpoint_step(run)
+    if done >= steps:
+        print(f"checkpoint at step {done} exists ({ckpt}), skipping")
+        return ckpt
+    log = run.parent / f"{run.name}.log"
+    if done:
+        cmd = ["--resume=true", f"--config_path={ckpt / 'train_config.json'}"]
+    else:
+        shutil.rmtree(run, ignore_errors=True)  # lerobot-train refuses an existing output dir without --resume
+        log.unlink(missing_ok=True)
+        policy = ([f"--policy.path={init}"] if init else [
+            "--policy.type=act", "--policy.pretrained_backbone_weights=null", f"--policy.dim_model={r.dim_model}",
+            f"--policy.n_heads={r.n_heads}", f"--policy.dim_feedforward={r.dim_feedforward}",
+            f"--policy.n_encoder_layers={r.n_encoder_layers}", "--policy.n_decoder_layers=1",
+            "--policy.n_vae_encoder_layers=1", f"--policy.chunk_size={r.chunk_size}",
+            f"--policy.n_action_steps={r.n_action_steps}"])
+        cmd = policy + [
+            f"--dataset.repo_id=realm/{dataset.name}", f"--dataset.root={dataset}", "--dataset.video_backend=pyav",
+            f"--policy.device={r.device}", "--policy.push_to_hub=false", f"--policy.optimizer_lr={r.lr}",
+            f"--policy.optimizer_lr_backbone={r.lr}", f"--steps={steps}", f"--batch_size={r.batch_size}",
+            "--num_workers=0", f"--save_freq={r.save_freq}", f"--log_freq={r.log_freq}", f"--output_dir={run}",
+            "--wandb.enable=false"]
+    cmd = [sys.executable, "-m", "lerobot.scripts.lerobot_train"] + cmd
+    with open(log, "a") as f, tqdm(total=steps, initial=done, desc=f"lerobot-train {run.name}", unit="step") as bar:
+        f.write(f"# {' '.join(cmd)}\n# start step {done}\n")
+        f.flush()
+        threads = r.threads or (os.cpu_count() if r.device == "cpu" else None)
+        p = subprocess.Popen(cmd, stdout=f, stderr=subprocess.STDOUT, cwd=ROOT, env=child_env(threads))
+        while p.poll() is None:
+            time.sleep(2)
+            curve = learning_curve(log, r.log_freq)
+            if curve:
+                bar.n = curve[-1]["step"]
+                bar.set_postfix(loss=f"{curve[-1]['loss']:.3f}")
+                bar.refresh()
+    if p.returncode != 0:
+        raise SystemExit(f"lerobot-train failed (exit {p.returncode}); see {log}")
     return ckpt
 
 
-def evaluate(args, ckpt: Path) -> Path:
-    from realm_ms.cli import main as realm
+LOG_LINE = re.compile(r"step:\S+ .*?\bloss:([0-9.eE+-]+).*?l1_loss:([0-9.eE+-]+)")
 
-    run = args.out / "eval"
-    perts = ["Default"] + ([args.perturbation] if args.perturbation and args.perturbation != "Default" else [])
-    stage(f"realm eval --policy lerobot:{ckpt} under {', '.join(perts)} -> {run}")
-    rc = realm(["eval", "--policy", f"lerobot:{ckpt}", "--tasks", args.task, "--perturbations", *perts,
-                "--episodes", str(args.eval_episodes), "--max-steps", str(args.eval_steps), "--workers", "1",
-                "--camera-size", f"{args.width}x{args.height}", "--device", args.device, "--no-progress", "--out", str(run)])
+
+def learning_curve(log: Path, log_freq: int) -> list[dict]:
+    """Loss per logged step from a `lerobot-train` log. LeRobot prints steps rounded ("5K"), so the
+    step is counted from each segment's start step (a resumed run writes a new "# start step")."""
+    rows, step = [], 0
+    if not log.exists():
+        return rows
+    for line in log.read_text(errors="replace").splitlines():
+        if line.startswith("# start step"):
+            step = int(line.split()[-1])
+        elif m := LOG_LINE.search(line):
+            step += log_freq
+            rows.append({"step": step, "loss": float(m.group(1)), "l1_loss": float(m.group(2))})
+    return rows
+
+
+def plot_curves(curves: dict[str, list[dict]], out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    for name, rows in curves.items():
+        if rows:
+            ax.plot([x["step"] for x in rows], [x["l1_loss"] for x in rows], label=f"{name}: L1 (action chunk)")
+    ax.set_yscale("log")
+    ax.set_xlabel("optimisation step")
+    ax.set_ylabel("training L1 loss (normalised actions)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------- evaluation
+
+
+def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episodes: int) -> Path:
+    cmd = realm_command() + [
+        "eval", "--policy", f"lerobot:{ckpt}", "--tasks", *r.tasks, "--perturbations", *perturbations,
+        "--episodes", str(episodes), "--seed", "0", "--max-steps", str(r.eval_max_steps),
+        "--replan-every", str(r.replan_every), "--workers", str(r.workers), "--camera-size", f"{r.width}x{r.height}",
+        "--device", r.device, "--out", str(run)]
+    rc = subprocess.run(cmd, cwd=ROOT, env=child_env()).returncode
     if rc != 0:
-        raise SystemExit(f"realm eval failed (exit {rc})")
-    report = run / "report.html"
-    rc = realm(["eval", "report", str(run), "--out", str(report)])
-    if rc != 0:
-        raise SystemExit(f"realm eval report failed (exit {rc})")
-    return report
+        raise SystemExit(f"realm eval into {run} failed (exit {rc})")
+    return run
+
+
+def cell_counts(run: Path) -> dict[tuple[str, str], tuple[int, int]]:
+    """(task, perturbation) -> (successes, episodes) over the run's finished records."""
+    from realm_ms.eval.records import latest_by_key, read_records
+
+    out: dict[tuple[str, str], list[int]] = {}
+    for rec in latest_by_key(read_records(run / "records.jsonl")).values():
+        if rec.get("status", "ok") == "ok":
+            c = out.setdefault((rec["task"], rec["perturbation"]), [0, 0])
+            c[0] += bool(rec["success"])
+            c[1] += 1
+    return {k: (v[0], v[1]) for k, v in out.items()}
+
+
+def worst_perturbation(table: Path) -> str:
+    """The perturbation with the lowest success rate over the tasks (ties: lowest mean progression)."""
+    from realm_ms.eval.records import latest_by_key, read_records
+    from realm_ms.task_index import DEFAULT
+
+    score: dict[str, list[float]] = {}
+    for rec in latest_by_key(read_records(table / "records.jsonl")).values():
+        if rec.get("status", "ok") == "ok" and rec["perturbation"] != DEFAULT:
+            score.setdefault(rec["perturbation"], []).append((float(rec["success"]), float(rec["progression"])))
+    if not score:
+        raise SystemExit(f"no perturbed episodes in {table}: cannot choose the perturbation to fine-tune on")
+    return min(score, key=lambda p: tuple(sum(x) / len(score[p]) for x in zip(*score[p])))
+
+
+# ---------------------------------------------------------------- summary
+
+
+def rate(k: int, n: int) -> str:
+    from realm_ms.eval.metrics import wilson_interval
+
+    lo, hi = wilson_interval(k, n)
+    return f"{k}/{n} = {k / n:.0%} [{lo:.0%}, {hi:.0%}]" if n else "-"
+
+
+def summarize(tasks, worst: str, table, base, tuned) -> dict:
+    """Success per task (Wilson 95 %) for both policies on Default and ``worst``, the fine-tuning delta
+    (Newcombe 95 %), and the 16-setting table of the base policy."""
+    from realm_ms.eval.metrics import difference_interval
+
+    rows = []
+    for t in tasks:
+        for p in ("Default", worst):
+            (kb, nb), (kt, nt) = base.get((t, p), (0, 0)), tuned.get((t, p), (0, 0))
+            lo, hi = difference_interval(kb, nb, kt, nt) if nb and nt else (float("nan"),) * 2
+            rows.append({"task": t, "perturbation": p, "base": [kb, nb], "finetuned": [kt, nt],
+                         "delta": (kt / nt - kb / nb) if nb and nt else None, "delta_interval": [lo, hi]})
+    perts = sorted({p for _, p in table}, key=lambda p: (p != "Default", p))
+    return {"worst_perturbation": worst, "rows": rows,
+            "table": {t: {p: list(table.get((t, p), (0, 0))) for p in perts} for t in tasks}}
+
+
+def write_summary(summary: dict, path: Path) -> str:
+    """``summary.json`` and the text printed at the end of the run."""
+    path.write_text(json.dumps(summary, indent=1))
+    lines = ["success [95% Wilson]; fine-tuning delta [95% Newcombe]",
+             f"{'task':<12} {'setting':<10} {'base':<24} {'fine-tuned':<24} delta"]
+    for x in summary["rows"]:
+        lo, hi = x["delta_interval"]
+        delta = f"{x['delta']:+.0%} [{lo:+.0%}, {hi:+.0%}]" if x["delta"] is not None else "-"
+        lines.append(f"{short(x['task']):<12} {x['perturbation']:<10} {rate(*x['base']):<24} {rate(*x['finetuned']):<24} {delta}")
+    table = summary["table"]
+    perts = list(next(iter(table.values()))) if table else []
+    lines += ["", "base policy, success k/n under each setting:", f"{'setting':<12}" + "".join(f"{short(t):>12}" for t in table)]
+    lines += [f"{p:<12}" + "".join(f"{'%d/%d' % tuple(table[t][p]):>12}" for t in table) for p in perts]
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------- main
+
+
+def parse(argv=None) -> Recipe:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Recipe.out)
+    ap.add_argument("--device", default="cpu", help="torch device for training and the policy: cpu | cuda")
+    ap.add_argument("--threads", type=int, default=None, help="torch CPU threads for training (default: all cores)")
+    ap.add_argument("--steps", type=int, default=None, help="training steps (default 2000; --quick 2)")
+    ap.add_argument("--workers", type=int, default=None, help="parallel env processes for realm eval (default 2)")
+    ap.add_argument("--quick", action="store_true", help="CI: every stage with a handful of steps (no success expected)")
+    a = ap.parse_args(argv)
+    kw = {k: v for k, v in (("out", a.out), ("device", a.device), ("threads", a.threads), ("steps", a.steps),
+                            ("workers", a.workers)) if v is not None}
+    return Recipe.quick(**kw) if a.quick else Recipe(**kw)
 
 
 def main(argv=None) -> int:
-    args = parse(argv)
-    os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
-    t0 = time.perf_counter()
-    dataset = export(args)
-    ckpt = train(args, dataset)
-    report = evaluate(args, ckpt)
-    print(f"\ntrain-eval loop done in {time.perf_counter() - t0:.0f} s")
-    print(f"dataset: {dataset}\ncheckpoint: {ckpt}\nreport: {report.resolve()}")
+    r = parse(argv)
+    out = r.out
+    out.mkdir(parents=True, exist_ok=True)
+    times: dict[str, float] = json.loads((out / "timings.json").read_text()) if (out / "timings.json").exists() else {}
+
+    def timed(name, fn, *a, **kw):
+        t0 = time.perf_counter()
+        result = fn(*a, **kw)
+        times[name] = times.get(name, 0.0) + time.perf_counter() - t0
+        (out / "timings.json").write_text(json.dumps(times, indent=1))
+        return result
+
+    stage(f"1/8 expert demos: {', '.join(f'{n} x {short(t)}' for t, n in zip(r.tasks, r.demos))} at {r.width}x{r.height}")
+    demo_roots = timed("demos", export_demos, r, [(t, "Default", n, DEMO_SEED, out / "demos" / f"demos_{short(t)}")
+                                                 for t, n in zip(r.tasks, r.demos)])
+    stage("2/8 one training set (LeRobot aggregate_datasets)")
+    dataset = timed("dataset", merge, demo_roots, out / "dataset", "realm/dataset")
+    stage(f"3/8 lerobot-train ACT from scratch, {r.steps} steps on {r.device}")
+    ckpt = timed("train", train, r, dataset, out / "train", r.steps)
+    stage(f"4/8 realm eval on Default, {r.eval_episodes} episodes per task")
+    default = timed("default", evaluate, r, ckpt, out / "eval" / "default", ["Default"], r.eval_episodes)
+    stage(f"5/8 realm eval: the 16-setting table, {r.table_episodes} episodes per cell")
+    table = timed("table", evaluate, r, ckpt, out / "eval" / "table", list(r.table_perturbations), r.table_episodes)
+    worst = worst_perturbation(table)
+    stage(f"6/8 realm eval under {worst} (hurt most), {r.eval_episodes} episodes per task")
+    base_worst = timed("worst", evaluate, r, ckpt, out / "eval" / "worst", [worst], r.eval_episodes)
+    stage(f"7/8 fine-tune: expert demos under {worst} + the original demos, {r.finetune_steps} steps from the checkpoint")
+    tag = worst.replace("+", "_")
+    ft_roots = timed("finetune_demos", export_demos, r, [
+        (t, worst, r.finetune_demos, FINETUNE_SEED, out / "demos" / f"demos_{short(t)}_{tag}") for t in r.tasks])
+    ft_data = timed("finetune_dataset", merge, demo_roots + ft_roots, out / f"dataset_{tag}", f"realm/dataset_{tag}")
+    ft_ckpt = timed("finetune", train, r, ft_data, out / "finetune", r.finetune_steps, init=ckpt)
+    tuned = timed("finetuned", evaluate, r, ft_ckpt, out / "eval" / "finetuned", ["Default", worst], r.eval_episodes)
+    stage("8/8 reports")
+    curves = {"train": learning_curve(out / "train.log", r.log_freq),
+              "finetune": learning_curve(out / "finetune.log", r.log_freq)}
+    with open(out / "learning_curve.csv", "w") as f:
+        f.write("run,step,loss,l1_loss\n")
+        f.writelines(f"{n},{x['step']},{x['loss']},{x['l1_loss']}\n" for n, rows in curves.items() for x in rows)
+    plot_curves(curves, out / "learning_curve.png")
+    for run in (default, table, base_worst, tuned):
+        subprocess.run(realm_command() + ["eval", "report", str(run)], cwd=ROOT, env=child_env(), check=True,
+                       stdout=subprocess.DEVNULL)
+    index = out / "report.html"
+    # both policies side by side (the base policy's Default and worst-perturbation runs, the fine-tuned one)
+    from realm_ms.eval.report import write_index
+
+    write_index([default, base_worst, tuned], index, names=["base: Default", f"base: {worst}", "fine-tuned"],
+                title=f"ACT trained on expert demos, and fine-tuned under {worst}")
+    summary = summarize(r.tasks, worst, cell_counts(table), cell_counts(default) | cell_counts(base_worst),
+                        cell_counts(tuned))
+    summary.update(recipe={k: (str(v) if isinstance(v, Path) else v) for k, v in dataclasses.asdict(r).items()},
+                   wall_s={k: round(v) for k, v in times.items()}, final_l1_loss=curves["train"][-1]["l1_loss"] if curves["train"] else None)
+    text = write_summary(summary, out / "summary.json")
+    print("\n" + text)
+    print(f"\nreport: {index.resolve()}\ncheckpoints: {ckpt} (base), {ft_ckpt} (fine-tuned)")
     return 0
 
 

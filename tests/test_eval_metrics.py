@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from realm_ms.cli import main
-from realm_ms.eval.metrics import bootstrap_interval, compute_metrics, wilson_interval
+from realm_ms.eval.metrics import bootstrap_interval, compute_metrics, difference_interval, wilson_interval
 from realm_ms.eval.validate import mmrv, pearson_r, rmsd
 
 
@@ -123,3 +123,13 @@ def test_realm_validate_bad_input_is_one_line_error(tmp_path, capsys):
     assert main(["validate", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "policy,task,real,sim" in err and "Traceback" not in err
+
+
+def test_difference_interval_matches_newcombe_1998():
+    # Newcombe (1998), Statistics in Medicine 17:873, method 10, example (56/70 vs 48/80): 0.0524 to 0.3339
+    lo, hi = difference_interval(48, 80, 56, 70)
+    assert lo == pytest.approx(0.0524, abs=5e-4) and hi == pytest.approx(0.3339, abs=5e-4)
+    lo, hi = difference_interval(56, 70, 48, 80)  # the other way round: mirrored
+    assert (lo, hi) == pytest.approx((-0.3339, -0.0524), abs=5e-4)
+    lo, hi = difference_interval(0, 20, 20, 20)  # 0 % -> 100 %: stays inside [-1, 1]
+    assert 0.6 < lo < hi == pytest.approx(1.0)

@@ -1,10 +1,13 @@
-"""examples/train_eval_loop.py end to end in its ``--smoke`` variant: export -> lerobot-train (with
-LeRobot's in-training eval on the ``realm`` env type) -> ``realm eval`` (Default + V-AUG) -> report."""
+"""examples/train_eval_loop.py (`make train-eval-demo`) end to end in its ``--quick`` variant: expert
+demos -> one dataset -> lerobot-train -> the perturbation table -> Default and the worst perturbation
+-> fine-tune on expert demos under it -> re-evaluation -> reports and summary; then a rerun resumes
+every stage without redoing any."""
 
 from __future__ import annotations
 
 import importlib.util
 import json
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -13,24 +16,51 @@ ROOT = Path(__file__).resolve().parents[1]
 def _example():
     spec = importlib.util.spec_from_file_location("train_eval_loop", ROOT / "examples" / "train_eval_loop.py")
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses resolve their module by name
     spec.loader.exec_module(mod)
     return mod
 
 
-def test_train_eval_loop_smoke(tmp_path, capsys):
+def _records(run: Path) -> list[dict]:
+    return [json.loads(line) for line in (run / "records.jsonl").read_text().splitlines() if line.strip()]
+
+
+def test_train_eval_loop_quick_runs_every_stage_and_resumes(tmp_path, capsys):
+    ex = _example()
     out = tmp_path / "te"
-    assert _example().main(["--smoke", "--out", str(out)]) == 0
+    assert ex.main(["--quick", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    report = out / "eval" / "report.html"
-    assert f"report: {report.resolve()}" in printed and report.exists()
+    assert f"report: {(out / 'report.html').resolve()}" in printed and (out / "report.html").exists()
     ckpt = out / "train" / "checkpoints" / "last" / "pretrained_model"
-    assert (ckpt / "model.safetensors").exists()
     cfg = json.loads((ckpt / "config.json").read_text())
-    assert cfg["type"] == "act"
-    assert set(cfg["input_features"]) == {"observation.state", "observation.images.exterior_1_left",
-                                          "observation.images.exterior_2_left", "observation.images.wrist_left"}
-    # LeRobot evaluated the checkpoint on the realm env type during training
-    assert list((out / "train" / "eval").rglob("eval_episode_0.mp4"))
-    records = [json.loads(line) for line in (out / "eval" / "records.jsonl").read_text().splitlines() if line.strip()]
-    assert sorted(r["perturbation"] for r in records) == ["Default", "V-AUG"]
-    assert all(r["status"] == "ok" and r["policy"].startswith("lerobot:") for r in records)
+    assert cfg["type"] == "act" and set(cfg["input_features"]) == {
+        "observation.state", "observation.images.exterior_1_left", "observation.images.exterior_2_left",
+        "observation.images.wrist_left"}
+    # the quick table is Default + V-AUG, so V-AUG is the perturbation fine-tuned on
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["worst_perturbation"] == "V-AUG"
+    assert {(r["task"], r["perturbation"]) for r in summary["rows"]} == {("REALM-PickApple-v1", "Default"),
+                                                                         ("REALM-PickApple-v1", "V-AUG")}
+    assert all(r["base"][1] == 1 and r["finetuned"][1] == 1 for r in summary["rows"])
+    assert set(summary["table"]["REALM-PickApple-v1"]) == {"Default", "V-AUG"}
+    assert "fine-tuning delta" in printed and "V-AUG" in printed
+    # the fine-tuned policy started from the base checkpoint, on the original demos + demos under V-AUG
+    ft = json.loads((out / "finetune" / "checkpoints" / "last" / "pretrained_model" / "train_config.json").read_text())
+    assert Path(ft["policy"]["pretrained_path"]).resolve() == ckpt.resolve()
+    assert json.loads((out / "dataset_V-AUG" / "meta" / "info.json").read_text())["total_episodes"] == 2
+    for run, perts in (("default", {"Default"}), ("table", {"Default", "V-AUG"}), ("worst", {"V-AUG"}),
+                       ("finetuned", {"Default", "V-AUG"})):
+        recs = _records(out / "eval" / run)
+        assert {r["perturbation"] for r in recs} == perts and all(r["status"] == "ok" for r in recs)
+    assert {r["policy"] for r in _records(out / "eval" / "finetuned")} == {
+        f"lerobot:{out / 'finetune' / 'checkpoints' / 'last' / 'pretrained_model'}"}
+    curve = (out / "learning_curve.csv").read_text().splitlines()
+    assert curve[0] == "run,step,loss,l1_loss" and {line.split(",")[0] for line in curve[1:]} == {"train", "finetune"}
+    assert (out / "learning_curve.png").stat().st_size > 0
+
+    # a rerun resumes: every stage finds its work done
+    sizes = {run: len(_records(out / "eval" / run)) for run in ("default", "table", "worst", "finetuned")}
+    assert ex.main(["--quick", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert printed.count("exists") >= 2  # both checkpoints kept
+    assert {run: len(_records(out / "eval" / run)) for run in sizes} == sizes
