@@ -7,12 +7,15 @@ Stages (each resumes: rerunning the same command skips finished work):
               parallel processes), seeds from 100000 so evaluation seeds (from 0) are never demo seeds;
 2. dataset    LeRobot's `aggregate_datasets` merges them into one training set;
 3. train      `lerobot-train` an ACT policy from scratch (nothing can be downloaded) on it; the loss
-              curve goes to `learning_curve.csv/.png`;
+              curve goes to `learning_curve.csv/.png`; every saved checkpoint is then evaluated on
+              validation seeds (from 50000) and the best one is the policy (validation curve beside
+              the loss curve);
 4. default    `realm eval` of the checkpoint on Default (20 episodes per task, seeds 0-19);
 5. table      `realm eval` under all 16 REALM settings (5 episodes per cell; paper-layout table);
 6. worst      `realm eval` under the perturbation that hurt most (20 episodes per task);
 7. finetune   expert demos under that perturbation, merged with the original demos,
-              `lerobot-train --policy.path=CHECKPOINT` on them, and the evaluation of 4 and 6 for it;
+              `lerobot-train --policy.path=CHECKPOINT` on them, checkpoint selection as in 3 (on
+              Default and that perturbation), and the evaluation of 4 and 6 for it;
 8. report     `realm eval report` of every run and an index with both policies side by side; the
               final table (success with Wilson intervals, fine-tuning delta with Newcombe's interval)
               on stdout and in `summary.json`.
@@ -37,6 +40,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 DEMO_SEED = 100_000  # demos use seeds DEMO_SEED + k; evaluation uses seeds from 0
 FINETUNE_SEED = 200_000
+VALIDATION_SEED = 50_000  # checkpoint selection: episodes neither demonstrated nor in the reported evaluation
 
 
 @dataclass
@@ -60,6 +64,8 @@ class Recipe:
     n_action_steps: int = 10
     save_freq: int = 1000
     log_freq: int = 50
+    # checkpoint selection: every saved checkpoint on validation seeds, the best one is evaluated
+    val_episodes: int = 5
     # evaluation
     eval_episodes: int = 20
     table_episodes: int = 5
@@ -76,7 +82,7 @@ class Recipe:
     @classmethod
     def quick(cls, **kw) -> Recipe:
         return cls(tasks=("REALM-PickApple-v1",), demos=(1,), demo_max_steps=8, success_only=False, steps=2, batch_size=4, dim_model=32, n_heads=2, dim_feedforward=64,
-                   n_encoder_layers=1, chunk_size=4, n_action_steps=4, save_freq=2, log_freq=1, eval_episodes=1,
+                   n_encoder_layers=1, chunk_size=4, n_action_steps=4, save_freq=2, log_freq=1, val_episodes=1, eval_episodes=1,
                    table_episodes=1, table_perturbations=("Default", "V-AUG"), eval_max_steps=4, replan_every=4,
                    workers=1, finetune_demos=1, finetune_steps=2, **kw)
 
@@ -166,7 +172,7 @@ def checkpoint_step(run: Path) -> int:
     return json.loads(f.read_text())["step"] if f.exists() else 0
 
 
-def train(r: Recipe, dataset: Path, run: Path, steps: int, init: Path | None = None) -> Path:
+def train(r: Recipe, dataset: Path, run: Path, steps: int, init: Path | None = None, save_freq: int | None = None) -> Path:
     """`lerobot-train` ACT on ``dataset`` (from ``init`` when fine-tuning); resumes an interrupted run."""
     from tqdm import tqdm
 
@@ -191,7 +197,7 @@ def train(r: Recipe, dataset: Path, run: Path, steps: int, init: Path | None = N
             f"--dataset.repo_id=realm/{dataset.name}", f"--dataset.root={dataset}", "--dataset.video_backend=pyav",
             f"--policy.device={r.device}", "--policy.push_to_hub=false", f"--policy.optimizer_lr={r.lr}",
             f"--policy.optimizer_lr_backbone={r.lr}", f"--steps={steps}", f"--batch_size={r.batch_size}",
-            "--num_workers=0", f"--save_freq={r.save_freq}", f"--log_freq={r.log_freq}", f"--output_dir={run}",
+            "--num_workers=0", f"--save_freq={save_freq or r.save_freq}", f"--log_freq={r.log_freq}", f"--output_dir={run}",
             "--wandb.enable=false"]
     cmd = [sys.executable, "-m", "lerobot.scripts.lerobot_train"] + cmd
     with open(log, "a") as f, tqdm(total=steps, initial=done, desc=f"lerobot-train {run.name}", unit="step") as bar:
@@ -229,13 +235,23 @@ def learning_curve(log: Path, log_freq: int) -> list[dict]:
     return rows
 
 
-def plot_curves(curves: dict[str, list[dict]], out: Path) -> None:
+def plot_curves(curves: dict[str, list[dict]], validation: dict[str, list[dict]], out: Path) -> None:
+    """Training L1 loss per step (left) and each checkpoint's validation success and progression (right)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    fig, (ax, av) = plt.subplots(1, 2, figsize=(11, 3.8))
+    for name, rows in validation.items():
+        steps = [x["step"] for x in rows]
+        av.plot(steps, [x["successes"] / max(1, x["episodes"]) for x in rows], "o-", label=f"{name}: success")
+        av.plot(steps, [x["progression"] for x in rows], "s--", label=f"{name}: progression")
+    av.set_xlabel("checkpoint step")
+    av.set_ylabel("validation episodes")
+    av.set_ylim(-0.02, 1.02)
+    av.grid(alpha=0.3)
+    av.legend(fontsize=8)
     for name, rows in curves.items():
         if rows:
             ax.plot([x["step"] for x in rows], [x["l1_loss"] for x in rows], label=f"{name}: L1 (action chunk)")
@@ -252,10 +268,10 @@ def plot_curves(curves: dict[str, list[dict]], out: Path) -> None:
 # ---------------------------------------------------------------- evaluation
 
 
-def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episodes: int) -> Path:
+def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episodes: int, seed: int = 0) -> Path:
     cmd = realm_command() + [
         "eval", "--policy", f"lerobot:{ckpt}", "--tasks", *r.tasks, "--perturbations", *perturbations,
-        "--episodes", str(episodes), "--seed", "0", "--max-steps", str(r.eval_max_steps),
+        "--episodes", str(episodes), "--seed", str(seed), "--max-steps", str(r.eval_max_steps),
         "--replan-every", str(r.replan_every), "--workers", str(r.workers), "--camera-size", f"{r.width}x{r.height}",
         "--device", r.device, "--out", str(run)]
     rc = subprocess.run(cmd, cwd=ROOT, env=child_env()).returncode
@@ -264,16 +280,37 @@ def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episode
     return run
 
 
-def cell_counts(run: Path) -> dict[tuple[str, str], tuple[int, int]]:
-    """(task, perturbation) -> (successes, episodes) over the run's finished records."""
+def select_checkpoint(r: Recipe, train_run: Path, perturbations: list[str], out: Path) -> tuple[Path, list[dict]]:
+    """Every checkpoint ``train_run`` saved, evaluated on validation seeds (``VALIDATION_SEED`` on); the
+    best by success, then mean progression, then the later step. Returns it and the validation curve."""
+    rows = []
+    for d in sorted(p for p in (train_run / "checkpoints").iterdir() if p.name.isdigit()):
+        run = evaluate(r, d / "pretrained_model", out / f"val_{train_run.name}_{d.name}", perturbations, r.val_episodes,
+                       seed=VALIDATION_SEED)
+        recs = [x for x in finished_records(run)]
+        rows.append({"step": int(d.name), "checkpoint": str(d / "pretrained_model"), "episodes": len(recs),
+                     "successes": sum(bool(x["success"]) for x in recs),
+                     "progression": sum(float(x["progression"]) for x in recs) / max(1, len(recs))})
+    best = max(rows, key=lambda x: (x["successes"] / max(1, x["episodes"]), x["progression"], x["step"]))
+    print(f"validation ({r.val_episodes} episodes per task and setting, seeds from {VALIDATION_SEED}): "
+          + ", ".join(f"step {x['step']}: {x['successes']}/{x['episodes']} prog {x['progression']:.2f}" for x in rows)
+          + f" -> step {best['step']}")
+    return Path(best["checkpoint"]), rows
+
+
+def finished_records(run: Path) -> list[dict]:
     from realm_ms.eval.records import latest_by_key, read_records
 
+    return [x for x in latest_by_key(read_records(run / "records.jsonl")).values() if x.get("status", "ok") == "ok"]
+
+
+def cell_counts(run: Path) -> dict[tuple[str, str], tuple[int, int]]:
+    """(task, perturbation) -> (successes, episodes) over the run's finished records."""
     out: dict[tuple[str, str], list[int]] = {}
-    for rec in latest_by_key(read_records(run / "records.jsonl")).values():
-        if rec.get("status", "ok") == "ok":
-            c = out.setdefault((rec["task"], rec["perturbation"]), [0, 0])
-            c[0] += bool(rec["success"])
-            c[1] += 1
+    for rec in finished_records(run):
+        c = out.setdefault((rec["task"], rec["perturbation"]), [0, 0])
+        c[0] += bool(rec["success"])
+        c[1] += 1
     return {k: (v[0], v[1]) for k, v in out.items()}
 
 
@@ -370,7 +407,8 @@ def main(argv=None) -> int:
     stage("2/8 one training set (LeRobot aggregate_datasets)")
     dataset = timed("dataset", merge, demo_roots, out / "dataset", "realm/dataset")
     stage(f"3/8 lerobot-train ACT from scratch, {r.steps} steps on {r.device}")
-    ckpt = timed("train", train, r, dataset, out / "train", r.steps)
+    timed("train", train, r, dataset, out / "train", r.steps)
+    ckpt, val = timed("validate", select_checkpoint, r, out / "train", ["Default"], out / "eval")
     stage(f"4/8 realm eval on Default, {r.eval_episodes} episodes per task")
     default = timed("default", evaluate, r, ckpt, out / "eval" / "default", ["Default"], r.eval_episodes)
     stage(f"5/8 realm eval: the 16-setting table, {r.table_episodes} episodes per cell")
@@ -383,7 +421,9 @@ def main(argv=None) -> int:
     ft_roots = timed("finetune_demos", export_demos, r, [
         (t, worst, r.finetune_demos, FINETUNE_SEED, out / "demos" / f"demos_{short(t)}_{tag}") for t in r.tasks])
     ft_data = timed("finetune_dataset", merge, demo_roots + ft_roots, out / f"dataset_{tag}", f"realm/dataset_{tag}")
-    ft_ckpt = timed("finetune", train, r, ft_data, out / "finetune", r.finetune_steps, init=ckpt)
+    timed("finetune", train, r, ft_data, out / "finetune", r.finetune_steps, init=ckpt,
+          save_freq=max(1, r.finetune_steps // 2))
+    ft_ckpt, ft_val = timed("finetune_validate", select_checkpoint, r, out / "finetune", ["Default", worst], out / "eval")
     tuned = timed("finetuned", evaluate, r, ft_ckpt, out / "eval" / "finetuned", ["Default", worst], r.eval_episodes)
     stage("8/8 reports")
     curves = {"train": learning_curve(out / "train.log", r.log_freq),
@@ -391,7 +431,7 @@ def main(argv=None) -> int:
     with open(out / "learning_curve.csv", "w") as f:
         f.write("run,step,loss,l1_loss\n")
         f.writelines(f"{n},{x['step']},{x['loss']},{x['l1_loss']}\n" for n, rows in curves.items() for x in rows)
-    plot_curves(curves, out / "learning_curve.png")
+    plot_curves(curves, {"train (Default)": val, f"finetune (Default + {worst})": ft_val}, out / "learning_curve.png")
     for run in (default, table, base_worst, tuned):
         subprocess.run(realm_command() + ["eval", "report", str(run)], cwd=ROOT, env=child_env(), check=True,
                        stdout=subprocess.DEVNULL)
@@ -404,7 +444,8 @@ def main(argv=None) -> int:
     summary = summarize(r.tasks, worst, cell_counts(table), cell_counts(default) | cell_counts(base_worst),
                         cell_counts(tuned))
     summary.update(recipe={k: (str(v) if isinstance(v, Path) else v) for k, v in dataclasses.asdict(r).items()},
-                   wall_s={k: round(v) for k, v in times.items()}, final_l1_loss=curves["train"][-1]["l1_loss"] if curves["train"] else None)
+                   wall_s={k: round(v) for k, v in times.items()}, validation={"train": val, "finetune": ft_val},
+                   final_l1_loss=curves["train"][-1]["l1_loss"] if curves["train"] else None)
     text = write_summary(summary, out / "summary.json")
     print("\n" + text)
     print(f"\nreport: {index.resolve()}\ncheckpoints: {ckpt} (base), {ft_ckpt} (fine-tuned)")

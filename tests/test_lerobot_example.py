@@ -44,6 +44,11 @@ def test_train_eval_loop_quick_runs_every_stage_and_resumes(tmp_path, capsys):
     assert all(r["base"][1] == 1 and r["finetuned"][1] == 1 for r in summary["rows"])
     assert set(summary["table"]["REALM-PickApple-v1"]) == {"Default", "V-AUG"}
     assert "fine-tuning delta" in printed and "V-AUG" in printed
+    # checkpoint selection evaluated every checkpoint on validation seeds, never the reported ones
+    assert [v["step"] for v in summary["validation"]["finetune"]] == [1, 2]
+    assert len(summary["validation"]["train"]) == 1 and summary["validation"]["train"][0]["episodes"] == 1
+    val_seeds = {r["seed"] for r in _records(out / "eval" / "val_finetune_000001")}
+    assert val_seeds and min(val_seeds) >= 50_000 and {r["seed"] for r in _records(out / "eval" / "default")} == {0}
     # the fine-tuned policy started from the base checkpoint, on the original demos + demos under V-AUG
     ft = json.loads((out / "finetune" / "checkpoints" / "last" / "pretrained_model" / "train_config.json").read_text())
     assert Path(ft["policy"]["pretrained_path"]).resolve() == ckpt.resolve()
