@@ -40,6 +40,21 @@ def test_mass_matrix_equals_mujoco(model64):
     assert np.abs(model64.mass_matrix(torch.as_tensor(q)[None])[0].numpy() - full).max() < 1e-9
 
 
+def test_the_robot_model_is_one_code_on_both_namespaces(model64):
+    """``ArmModel.numpy()`` is the same model on float64 numpy: every term agrees with torch's."""
+    npm = model64.numpy()
+    rng = np.random.default_rng(2)
+    q, qd, qdd = (rng.uniform(-2, 2, (4, 7)) for _ in range(3))
+    t = torch.as_tensor
+    calls = {"link_frames": (q,), "fk": (q,), "jacobian": (q,), "rnea": (q, qd, qdd), "gravity_torque": (q,),
+             "coriolis_torque": (q, qd), "mass_matrix": (q,), "mass_matrix_rnea": (q,)}
+    for name, args in calls.items():
+        a, b = getattr(model64, name)(*map(t, args)), getattr(npm, name)(*args)
+        assert isinstance(a, torch.Tensor) and isinstance(b, np.ndarray), name
+        assert np.abs(a.numpy() - b).max() < 1e-12, name
+    assert np.abs(npm.gravity_torque(q)).max() > 1.0  # not trivially zero
+
+
 @pytest.mark.parametrize("effect", ["payload:mass=0.8", "armature:ia=0.1"])
 def test_build_time_effects_tell_the_driver_the_plant_inertia_they_add(model64, effect):
     """``plant_inertia`` of a build-time effect equals the change of MuJoCo's mass matrix when the
@@ -187,10 +202,8 @@ def test_path_rate_matches_the_mujoco_reference_on_both_paths():
 def test_path_plans_agree_across_backends_with_partial_replans():
     """Several envs, targets changing in some rows only and one arm pushed off its path: the batched
     torch plan and the numpy plan re-plan the same rows and give the same torques."""
-    from realm_ms.agents.arm_model import NumpyArmModel
-
     model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
-    npm = NumpyArmModel(model)
+    npm = model.numpy()
     b, dt = 3, 1 / 120
     q0 = np.repeat(np.array([HOME]), b, 0)
     outs = []
@@ -206,7 +219,8 @@ def test_path_plans_agree_across_backends_with_partial_replans():
                 target[k // 8 % b] += 0.05  # one row's target changes per action
                 drv.set_target(torch.as_tensor(target, dtype=torch.float32))
             tau = drv.torque(torch.as_tensor(q, dtype=torch.float32), torch.as_tensor(qd, dtype=torch.float32), dt).double().numpy()
-            bias, mass = npm.bias_and_mass(npm.link_frames(q), qd)
+            links = npm.links(npm.link_frames(q))
+            bias, mass = npm.bias_at(links, qd), npm.mass_at(links)
             qd = qd + dt * np.linalg.solve(mass + arm, (tau - bias)[..., None])[..., 0]
             if k == 20:
                 qd[1] += 0.5  # a push: row 1 leaves its predicted path

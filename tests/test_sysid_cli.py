@@ -26,7 +26,7 @@ def data(tmp_path_factory):
 def test_effects_lists_the_library(capsys):
     code, out, _ = run(capsys, "effects", "--json")
     lib = json.loads(out)
-    assert code == 0 and len(lib) == 11
+    assert code == 0 and len(lib) == 12
     lat = next(e for e in lib if e["name"] == "latency")
     assert lat["params"][0]["unit"] == "s" and lat["params"][0]["bounds"] == [0.0, 0.1]
 

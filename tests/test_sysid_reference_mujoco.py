@@ -120,7 +120,7 @@ def test_implicit_damping_scheme_is_what_broke_the_agreement(reference_log):
     assert rms.max() > 5e-3, rms
 
 
-@pytest.mark.parametrize("effect", ["none", "coulomb_friction", "viscous_damping", "payload", "encoder_bias"])
+@pytest.mark.parametrize("effect", ["none", "coulomb_friction", "viscous_damping", "payload", "encoder_bias", "link_mass"])
 def test_true_effect_replays_the_reference_with_that_effect_within_1_mrad(effect):
     """A hidden effect at its typical strength, simulated by the 1 kHz law on the MuJoCo plant, and
     the same effect replayed by the benchmark's 120 Hz exact step: the replay must follow it as well

@@ -376,7 +376,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s = sub.add_parser("diagnose", help="rank the missing effects by held-out improvement")
     s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")
     _common(s)
-    s.add_argument("--candidates", help="comma-separated effect names (default: all; see `realm sysid effects`)")
+    s.add_argument("--candidates", help="comma-separated effect names (default: all but link_mass in position space; see `realm sysid effects`)")
     s.add_argument("--top", type=integer(1), default=5, help="suspects to print, integer >= 1 (default 5)")
     s.add_argument("--json", metavar="FILE", help="also write the diagnosis as JSON to FILE")
     _space_arg(s)

@@ -37,7 +37,8 @@ from realm_ms.sysid.timeseries import Trajectory
 
 @dataclass
 class DiagnoseConfig:
-    candidates: tuple[str, ...] = tuple(EFFECTS)
+    # every library effect but those screened only on request (link_mass: 7 simulated parameters)
+    candidates: tuple[str, ...] = tuple(n for n, c in EFFECTS.items() if c.screened)
     segment_s: float = 8.0
     burn_in_s: float = 1.0
     refine: int = 3  # effects that get a second linearised iteration

@@ -77,46 +77,62 @@ def build_model(config: MujocoConfig | None = None, urdf: str | None = None):
 
 
 class MujocoBuildTarget:
-    """Build-time effects (armature, payload) on one MuJoCo model; same interface as ``BuildTarget``."""
+    """Build-time effects (armature, payload, link_mass) on one MuJoCo model; same interface as
+    ``BuildTarget`` (inertial changes apply on top of the body's current inertial, ``reset`` first)."""
 
     def __init__(self, model, flange_offset: np.ndarray):
+        import mujoco
+
         self.m = model
         self.flange_offset = np.asarray(flange_offset, dtype=float)
         self.body = model.nbody - 1  # panda_link7 (+ flange and welded gripper)
-        self._nominal = (model.dof_armature.copy(), float(model.body_mass[self.body]), model.body_ipos[self.body].copy(),
-                         model.body_iquat[self.body].copy(), model.body_inertia[self.body].copy())
+        self._bodies = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"panda_link{k + 1}") for k in range(7)]
+        self._armature = model.dof_armature.copy()
+        self._inertials = {b: self._get(b) for b in self._bodies}
 
-    def reset(self) -> None:
-        arm, mass, ipos, iquat, inertia = self._nominal
-        m, b = self.m, self.body
-        m.dof_armature[:] = arm
-        m.body_mass[b], m.body_ipos[b], m.body_iquat[b], m.body_inertia[b] = mass, ipos, iquat, inertia
-
-    def add_armature(self, values: np.ndarray) -> None:
-        self.m.dof_armature[:] = self._nominal[0] + np.asarray(values, dtype=float)[: self.m.nv]
-
-    def add_point_mass(self, mass: float, offset_in_flange: np.ndarray) -> None:
+    def _get(self, b: int):
         import mujoco
 
-        from realm_ms.agents.arm_model import _Inertial
-
-        if mass <= 0:
-            return
-        _, m0, ipos, iquat, inertia = self._nominal
         rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, iquat)
+        mujoco.mju_quat2Mat(rot, self.m.body_iquat[b])
         rot = rot.reshape(3, 3)
-        body = _Inertial(m0, ipos, rot @ np.diag(inertia) @ rot.T)
-        point = _Inertial(float(mass), self.flange_offset + np.asarray(offset_in_flange, dtype=float), np.zeros((3, 3)))
-        merged = _Inertial.merge([body, point])
-        w, v = np.linalg.eigh(merged.inertia)
+        return float(self.m.body_mass[b]), self.m.body_ipos[b].copy(), rot @ np.diag(self.m.body_inertia[b]) @ rot.T
+
+    def _set(self, b: int, mass: float, com: np.ndarray, inertia: np.ndarray) -> None:
+        import mujoco
+
+        w, v = np.linalg.eigh(np.asarray(inertia, dtype=float))
         if np.linalg.det(v) < 0:
             v[:, 0] = -v[:, 0]
         quat = np.zeros(4)
         mujoco.mju_mat2Quat(quat, v.reshape(-1))
-        b = self.body
-        self.m.body_mass[b], self.m.body_ipos[b] = merged.mass, merged.com
+        self.m.body_mass[b], self.m.body_ipos[b] = mass, com
         self.m.body_iquat[b], self.m.body_inertia[b] = quat, np.maximum(w, 1e-10)
+
+    def reset(self) -> None:
+        self.m.dof_armature[:] = self._armature
+        for b, v in self._inertials.items():
+            self._set(b, *v)
+
+    def add_armature(self, values: np.ndarray) -> None:
+        self.m.dof_armature[:] = self._armature + np.asarray(values, dtype=float)[: self.m.nv]
+
+    def add_point_mass(self, mass: float, offset_in_flange: np.ndarray) -> None:
+        self.add_body(mass, offset_in_flange, np.zeros((3, 3)))
+
+    def add_body(self, mass: float, offset_in_flange: np.ndarray, inertia: np.ndarray) -> None:
+        from realm_ms.agents.arm_model import _Inertial
+
+        if mass <= 0:
+            return
+        body = _Inertial(*self._get(self.body))
+        part = _Inertial(float(mass), self.flange_offset + np.asarray(offset_in_flange, dtype=float), np.asarray(inertia, dtype=float))
+        merged = _Inertial.merge([body, part])
+        self._set(self.body, merged.mass, merged.com, merged.inertia)
+
+    def map_link_inertial(self, body: int, fn) -> None:
+        b = self._bodies[body]
+        self._set(b, *fn(*self._get(b)))
 
 
 class MujocoReference:

@@ -10,7 +10,8 @@ friction is our smooth law, its payload sits where ours does. Here every effect 
 | ``armature`` | ``dof_armature`` | rotor inertia |
 | ``stiffness`` | ``jnt_stiffness`` + ``qpos_spring`` | joint springs to the trajectory's start pose (no library effect) |
 | ``payload_mass``, ``payload_com`` | a child body of ``panda_link7`` | payload with its own centre of mass (flange frame) and inertia |
-| ``link_scale`` | ``body_mass``, ``body_inertia`` | link k's mass and inertia x (1 + s) (no library effect in position space) |
+| ``link_scale`` | ``body_mass``, ``body_inertia`` | link k's mass and inertia x (1 + s) (library: ``link_mass`` s_k) |
+| ``link_dcx/y/z`` | ``body_ipos`` | link k's centre of mass shifted (m, link frame; library: ``link_mass`` with ``fit_com``) |
 | ``gaz`` | ``qfrc_applied`` | Gaz et al. 2019's identified Panda friction (sigmoid law, ``GAZ_PHI``) x ``gaz`` |
 | ``lugre_*`` | ``qfrc_applied`` | LuGre friction: a bristle state z per joint, integrated at the plant rate |
 
@@ -45,6 +46,9 @@ class NativeEffects:
     payload_com: tuple[float, float, float] = (0.0, 0.0, 0.0)  # m, flange frame
     payload_inertia: float = 0.0  # kg·m², about its CoM (diagonal)
     link_scale: tuple[float, ...] = (0.0,) * 7  # relative mass/inertia change of links 1..7
+    link_dcx: tuple[float, ...] = (0.0,) * 7  # m, CoM shift of links 1..7 along their x axis
+    link_dcy: tuple[float, ...] = (0.0,) * 7
+    link_dcz: tuple[float, ...] = (0.0,) * 7
     gaz: float = 0.0  # scale of Gaz et al.'s identified sigmoid friction (1: the paper's values)
     lugre_fc: tuple[float, ...] = (0.0,) * 7  # N·m, LuGre Coulomb level (0: no LuGre on that joint)
     lugre_fs_ratio: float = 1.5  # breakaway level / Coulomb level
@@ -94,6 +98,7 @@ VARIANTS = {
     "armature": "armature=0.2",
     "payload_com": "payload_mass=0.8,payload_com_x=0.12,payload_com_z=0.05,payload_inertia=0.002",
     "link4_mass": "link_scale4=0.3",
+    "link4_inertial": "link_scale4=0.3,link_dcx4=0.04,link_dcy4=-0.03",
     "springs": "stiffness=2.0",
     "frictionloss+payload_com": "frictionloss=0.3,payload_mass=0.8,payload_com_x=0.12,payload_com_z=0.05",
     "gaz": "gaz=1",
@@ -128,6 +133,7 @@ def build_native_model(fx: NativeEffects, config: MujocoConfig):
         b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, f"panda_link{k + 1}")
         m.body_mass[b] *= 1 + s
         m.body_inertia[b] *= 1 + s
+        m.body_ipos[b] += (fx.link_dcx[k], fx.link_dcy[k], fx.link_dcz[k])
     return m
 
 

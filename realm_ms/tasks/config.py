@@ -1,11 +1,11 @@
 """``RealmEnvConfig``: the one typed description of a REALM env.
 
 ``gym.make("REALM-PickApple-v1", camera_width=640, shader="rt", perturbation="V-LIGHT")`` maps its
-keyword arguments onto this config (the old loose keywords are its field names, see
-``KWARG_FIELDS``); ``gym.make(ID, config=RealmEnvConfig(...))`` passes one whole. The env keeps the
-resolved config as ``env.unwrapped.config``; ``to_dict()`` is plain JSON (records store it) and
-``make_env(RealmEnvConfig.from_dict(d))`` re-creates the same env. Evaluation and the LeRobot
-plugin build their envs through ``make_env``.
+keyword arguments onto this config (``KWARG_FIELDS``: keyword -> field; an unknown keyword is an
+error naming the nearest known one); ``gym.make(ID, config=RealmEnvConfig(...))`` passes one
+whole. The env keeps the resolved config as ``env.unwrapped.config``; ``to_dict()`` is plain JSON
+(records store it) and ``make_env(RealmEnvConfig.from_dict(d))`` re-creates the same env.
+Evaluation and the LeRobot plugin build their envs through ``make_env``.
 """
 
 from __future__ import annotations
@@ -138,7 +138,7 @@ class RealmEnvConfig:
         return kw
 
 
-# gym.make keyword -> (config part, field); the keywords users already know stay valid
+# gym.make keyword -> (config part, field); an unknown keyword is an error naming the nearest known one
 KWARG_FIELDS: dict[str, tuple[str, str]] = {
     "camera_width": ("cameras", "width"),
     "camera_height": ("cameras", "height"),
@@ -147,7 +147,6 @@ KWARG_FIELDS: dict[str, tuple[str, str]] = {
     "cameras": ("top", "cameras"),
     "droid_control": ("top", "control"),
     "robot_model": ("top", "robot_model"),
-    "scene_name": ("top", "scene"),
     "scene": ("top", "scene"),
     "perturbation": ("top", "perturbation"),
     "settle_steps": ("top", "settle_steps"),

@@ -16,7 +16,6 @@ from __future__ import annotations
 import dataclasses
 import sys
 import warnings
-from typing import Any
 
 import numpy as np
 import sapien
@@ -33,7 +32,7 @@ from realm_ms.known_warnings import install as _silence_known_warnings
 from realm_ms.rendering import camera_shader_config, vertical_fov
 from realm_ms.tasks.perturbation_set import PerturbationSet
 from realm_ms.tasks.placement import sample_placements
-from realm_ms.tasks.progression import ProgressionTracker, StageInputs, Thresholds
+from realm_ms.tasks.progression import ProgressionTracker, StageInputs
 from realm_ms.tasks.scenes import get_scene
 from realm_ms.tasks.config import RealmEnvConfig, _control_fields
 from realm_ms.tasks.task_spec import TASKS, CameraSpec, TaskSpec
@@ -98,19 +97,6 @@ class RealmEnv(BaseEnv):
         )
         self._install_action_space()
 
-    # kept for code that reads them: the camera settings live in ``self.cameras``
-    @property
-    def camera_size(self) -> tuple[int, int]:
-        return (self.cameras.width, self.cameras.height)
-
-    @property
-    def shader(self) -> str:
-        return self.cameras.shader
-
-    @property
-    def denoiser(self) -> str:
-        return self.cameras.denoiser
-
     # ------------------------------------------------------------------ configuration
     @property
     def _default_sim_config(self):
@@ -131,12 +117,13 @@ class RealmEnv(BaseEnv):
             pose = self.perturbations.camera_pose(cam.uid, pose)
         return CameraConfig(
             cam.uid, pose=pose, width=w, height=h, fov=vertical_fov(cam.hfov_deg, w, h), near=0.01, far=10.0,
-            shader_config=camera_shader_config(shader, self.denoiser),
+            shader_config=camera_shader_config(shader, self.cameras.denoiser),
         )
 
     @property
     def _default_sensor_configs(self):
-        return [self._camera_config(c, self.camera_size, self.shader) for c in self.task_spec.cameras]
+        size = (self.cameras.width, self.cameras.height)
+        return [self._camera_config(c, size, self.cameras.shader) for c in self.task_spec.cameras]
 
     @property
     def _default_human_render_camera_configs(self):

@@ -424,6 +424,8 @@ CASES: list[Case] = [
     # ------------------------------------------------------------------------ gym.make keywords, scene names
     Case("env-unknown-keyword", call=_make(camera_widht=64), env=True,
          error=r"unknown gym\.make keyword\(s\) 'camera_widht' \(did you mean 'camera_width'\?\); REALM keywords: .*ManiSkill keywords: "),
+    Case("env-scene-name-keyword", call=_make(scene_name="kitchen"), env=True,
+         error=r"unknown gym\.make keyword\(s\) 'scene_name' \(did you mean 'scene'\?\)"),
     Case("env-num-envs-0", call=_make(num_envs=0), env=True, error=r"num_envs must be >= 1, got 0"),
     Case("env-num-envs-fraction", call=_make(num_envs=1.5), env=True, error=r"num_envs must be a whole number"),
     Case("env-scene-key-twice", call=_make(scene="kitchen?table_height=0.74&table_height=0.9"), env=True,

@@ -7,7 +7,8 @@ gravity on the real robot, so the simulated arm keeps gravity and the controller
 its model), and the torque clipped to the Franka limits (87 / 12 N.m).
 
 - ``presets.py``: gain and joint-physics presets; ``config.py``: ``DroidControlConfig``.
-- ``law.py``: the law, written once against an array backend (``backend.py``: torch or numpy).
+- ``law.py``: the law, written once against an array backend (``backend.py``: the torch or numpy
+  namespace of ``agents/arrays.py`` and the robot's model, itself one code on both).
 - ``rates.py``: where the model terms are taken (``model_rate``: along the predicted path, every
   physics step, once per target); ``integrators.py``: how the law is integrated over a 120 Hz
   physics step (``integrator``: step-exact, implicit drive damping, explicit); ``folded.py``: the

@@ -8,7 +8,8 @@ one. The sysid workbench identifies them; the benchmark controller runs them thr
 
 Module map: ``effect.py`` (interface, config), ``parameter.py`` (units, bounds, unit cube),
 ``build_target.py`` (articulation edits of build-time effects), ``model_terms.py`` and
-``implicit_torque.py`` (numerics shared by torque effects), then one file per effect.
+``implicit_torque.py`` (numerics shared by torque effects), ``inertial.py`` (physically consistent
+inertial parameters and their regressor: payload, link_mass), then one file per effect.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from realm_ms.agents.effects.encoder_bias import EncoderBias
 from realm_ms.agents.effects.gain_mismatch import GainMismatch
 from realm_ms.agents.effects.gravity_comp_error import GravityCompError
 from realm_ms.agents.effects.latency import Latency
+from realm_ms.agents.effects.link_mass import LinkMass
 from realm_ms.agents.effects.payload import Payload
 from realm_ms.agents.effects.stribeck_friction import StribeckFriction
 from realm_ms.agents.effects.torque_limit import TorqueLimit
@@ -32,7 +34,7 @@ from realm_ms.registry import Registry
 EFFECTS: Registry[type[Effect]] = Registry("effect")
 
 for _cls in (CoulombFriction, ViscousDamping, StribeckFriction, Armature, Payload, GravityCompError,
-             Latency, GainMismatch, TorqueLimit, Backlash, EncoderBias):
+             Latency, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass):
     EFFECTS.register(_cls.name, _cls)
 
 #: pairs the position data of one gain setting cannot always separate; diagnosis reports both
@@ -43,6 +45,7 @@ CONFOUNDS: list[tuple[str, str]] = [
     ("backlash", "encoder_bias"),
     ("latency", "torque_limit"),
     ("armature", "gain_mismatch"),
+    ("payload", "link_mass"),
 ]
 
 

@@ -1,7 +1,9 @@
-"""``BuildTarget``: one PhysX articulation that build-time effects (armature, payload) modify.
+"""``BuildTarget``: one PhysX articulation that build-time effects (armature, payload, link_mass) modify.
 
-The nominal joint armature and flange inertial are remembered on first use, so an effect always
-sets absolute values (nominal + effect) and can be re-applied before every rollout.
+The nominal joint armature and link inertials are remembered on first use and restored by
+``reset``: armature is set absolute (nominal + effect); inertial changes apply on top of the link's
+current inertial (so a payload and a link-7 correction compose), after a ``reset`` before every
+rollout.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from realm_ms.agents.effects.parameter import NUM_JOINTS
 
 class BuildTarget:
     """One PhysX articulation whose nominal joint/link properties are remembered on first use, so
-    build-time effects set *absolute* values (nominal + effect) and can be re-applied per rollout."""
+    build-time effects can be re-applied per rollout after a ``reset``."""
 
     _cache: dict[int, "BuildTarget"] = {}
 
@@ -44,6 +46,7 @@ class BuildTarget:
         self.nominal_mass = float(self.flange.get_mass())
         self.nominal_cmass = self.flange.get_cmass_local_pose()
         self.nominal_inertia = np.asarray(self.flange.get_inertia(), dtype=float)
+        self._nominal_links: dict[int, tuple] = {}  # id(link) -> (link, mass, cmass pose, inertia)
 
     @classmethod
     def of(cls, articulation: Any, joint_indices: list[int] | None = None) -> "BuildTarget":
@@ -59,30 +62,76 @@ class BuildTarget:
         self.flange.set_mass(self.nominal_mass)
         self.flange.set_cmass_local_pose(self.nominal_cmass)
         self.flange.set_inertia(self.nominal_inertia)
+        for link, mass, pose, inertia in self._nominal_links.values():
+            link.set_mass(mass)
+            link.set_cmass_local_pose(pose)
+            link.set_inertia(inertia)
 
     def add_armature(self, values: np.ndarray) -> None:
         for j, a, v in zip(self.joints, self.nominal_armature, values):
             j.set_armature([a + float(v)])
 
+    def _link(self, body: int):
+        """PhysX link of arm body ``body`` (0-based: panda_link{body+1})."""
+        name = f"panda_link{body + 1}"
+        for l in self.art.get_links():
+            n = l.get_name()
+            if n == name or n.endswith("_" + name):
+                return l
+        raise ValueError(f"articulation has no {name}")
+
+    def _remember(self, link) -> None:
+        """Nominal inertial of a link whose inertial an effect changes (``reset`` restores it)."""
+        if id(link) not in self._nominal_links:
+            self._nominal_links[id(link)] = (link, float(link.get_mass()), link.get_cmass_local_pose(),
+                                             np.asarray(link.get_inertia(), dtype=float))
+
     def add_point_mass(self, mass: float, offset_in_flange: np.ndarray) -> None:
         """Rigidly attach a point mass at ``offset_in_flange`` (m, flange frame) to the flange link."""
+        self.add_body(mass, offset_in_flange, np.zeros((3, 3)))
+
+    def add_body(self, mass: float, offset_in_flange: np.ndarray, inertia: np.ndarray) -> None:
+        """Rigidly attach a body (``inertia`` about its CoM, flange axes) at ``offset_in_flange`` (m,
+        flange frame) to the flange link, on top of its current inertial."""
         if mass <= 0:
             return
-        import sapien
-        import torch
-        from mani_skill.utils.geometry.rotation_conversions import matrix_to_quaternion, quaternion_to_matrix
-
         from realm_ms.agents.arm_model import _Inertial
 
-        pose = self.nominal_cmass
-        rot = quaternion_to_matrix(torch.as_tensor(np.asarray(pose.q, dtype=np.float64))).numpy()
-        body = _Inertial(self.nominal_mass, np.asarray(pose.p, dtype=float), rot @ np.diag(self.nominal_inertia) @ rot.T)
-        point = _Inertial(float(mass), self.flange_offset + np.asarray(offset_in_flange, dtype=float), np.zeros((3, 3)))
+        self._remember(self.flange)
+        body = _Inertial(*get_inertial(self.flange))
+        point = _Inertial(float(mass), self.flange_offset + np.asarray(offset_in_flange, dtype=float), np.asarray(inertia, dtype=float))
         merged = _Inertial.merge([body, point])
-        w, v = np.linalg.eigh(merged.inertia)
-        if np.linalg.det(v) < 0:
-            v[:, 0] = -v[:, 0]
-        quat = matrix_to_quaternion(torch.as_tensor(v)).numpy().astype(np.float32)  # wxyz, as sapien
-        self.flange.set_mass(merged.mass)
-        self.flange.set_cmass_local_pose(sapien.Pose(merged.com.astype(np.float32), quat))
-        self.flange.set_inertia(np.maximum(w, 1e-8).astype(np.float32))
+        set_inertial(self.flange, merged.mass, merged.com, merged.inertia)
+
+    def map_link_inertial(self, body: int, fn) -> None:
+        """Replace arm body ``body``'s inertial (0-based) by ``fn(mass, com, inertia)`` of its current
+        one (link frame, inertia about the CoM) -> the same triple."""
+        link = self._link(body)
+        self._remember(link)
+        set_inertial(link, *fn(*get_inertial(link)))
+
+
+def get_inertial(link) -> tuple[float, np.ndarray, np.ndarray]:
+    """(mass, CoM, inertia about the CoM) of a PhysX link, link frame."""
+    import torch
+    from mani_skill.utils.geometry.rotation_conversions import quaternion_to_matrix
+
+    pose = link.get_cmass_local_pose()
+    rot = quaternion_to_matrix(torch.as_tensor(np.asarray(pose.q, dtype=np.float64))).numpy()
+    return float(link.get_mass()), np.asarray(pose.p, dtype=float), rot @ np.diag(np.asarray(link.get_inertia(), dtype=float)) @ rot.T
+
+
+def set_inertial(link, mass: float, com: np.ndarray, inertia: np.ndarray) -> None:
+    """Set a PhysX link's inertial from (mass, CoM, inertia about the CoM), link frame: PhysX takes
+    the principal moments and the principal axes' rotation."""
+    import sapien
+    import torch
+    from mani_skill.utils.geometry.rotation_conversions import matrix_to_quaternion
+
+    w, v = np.linalg.eigh(np.asarray(inertia, dtype=float))
+    if np.linalg.det(v) < 0:
+        v[:, 0] = -v[:, 0]
+    quat = matrix_to_quaternion(torch.as_tensor(v)).numpy().astype(np.float32)  # wxyz, as sapien
+    link.set_mass(float(mass))
+    link.set_cmass_local_pose(sapien.Pose(np.asarray(com, dtype=np.float32), quat))
+    link.set_inertia(np.maximum(w, 1e-8).astype(np.float32))

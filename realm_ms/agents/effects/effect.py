@@ -41,6 +41,7 @@ class Effect(ActuationStage):
     signature: ClassVar[str] = ""
     order: ClassVar[int] = 50  # position in the stage chain (lower first)
     build_time: ClassVar[bool] = False
+    screened: ClassVar[bool] = True  # a default candidate of position-space diagnosis
     Config: ClassVar[type] = EffectConfig
 
     def __init__(self, config: EffectConfig | None = None, values: dict[str, Any] | None = None):

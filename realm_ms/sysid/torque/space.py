@@ -83,7 +83,8 @@ class Term:
     values: dict[str, float] = field(default_factory=dict)
 
     @classmethod
-    def make(cls, name: str, values: dict | None = None) -> "Term":
+    def make(cls, name: str, values: dict | None = None, config: dict | None = None) -> "Term":
+        """``config``: the effect's settings (e.g. ``{"fit_com": True}`` for link_mass), as a dict."""
         if name in TRACKING_ONLY:
             raise ValueError(f"{name} acts through the position controller (tracking): it needs `q_cmd` in the data; "
                              "in torque space use friction, viscous, armature, payload, gravity or link-mass effects")
@@ -94,17 +95,25 @@ class Term:
         else:
             from realm_ms.agents.effects import make_effect
 
-            fx = make_effect(name)
+            fx = make_effect(name, None, config)
             specs, config = fx.specs, fx.config
         keys = []
         for sp in specs:
             if not sp.fit_by_default:
                 continue
-            keys += [(f"{sp.name}{j}", sp) for j in range(1, 8)] if sp.per_joint else [(sp.name, sp)]
+            if sp.per_joint:
+                keys += [(f"{sp.name}{j + 1}", sp) for j in sp.joints]
+            else:
+                keys.append((sp.name, sp))
         t = cls(name, config, keys, {k: sp.off for k, sp in keys})
         if values:
             t.values.update({k: float(v) for k, v in values.items() if k in t.values})
         return t
+
+    def config_dict(self) -> dict:
+        from dataclasses import asdict
+
+        return {} if self.config is None else {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self.config).items()}
 
     def nominal_values(self) -> dict[str, float]:
         return {k: sp.nominal for k, sp in self.specs}

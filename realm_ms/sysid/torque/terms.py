@@ -12,11 +12,13 @@ the motors must *add* (friction has the sign of q̇, as in Gaz et al. 2019).
 | viscous_damping | b q̇ |
 | stribeck_friction | fs (r + (1 - r) exp(-(q̇/vs)²)) tanh(q̇/eps) |
 | armature | ia q̈ |
-| payload | Jp^T m (a_p - g): a point mass m at com (flange frame), a_p = Jp q̈ + J̇p q̇ |
+| payload | Y_7(q, q̇, q̈) π_p: the standard parameters π_p of the payload (mass, CoM, inertia) on body 7 |
 | gravity_comp_error | scale g_model(q) (the model's gravity is off by ``scale``) |
-| link_mass | Σ_k s_k tau_k(q, q̇, q̈): link k's own inverse dynamics scaled by s_k (mass, first moment and
-  inertia together, so every link stays physically consistent for s_k > -1: positive mass,
-  positive-definite inertia, triangle inequalities) |
+| link_mass | Σ_k Y_k(q, q̇, q̈) (π_k(params) - π_k,nominal): link k's corrected mass, CoM and inertia, physical for
+  every value in bounds (``agents/effects/link_mass.py``) |
+
+Y_k is body k's inverse-dynamics regressor (``agents/effects/inertial.py``), computed once per
+sample set, so a fit of inertial parameters costs no dynamics evaluations.
 
 eps = 0.01 rad/s (the smooth sign). Tracking effects (latency, gain_mismatch, torque_limit,
 backlash, encoder_bias) act through the position controller and have no torque-space form: they
@@ -28,7 +30,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-import numpy as np
 import torch
 
 from realm_ms.agents.effects.parameter import ParamSpec
@@ -88,55 +89,40 @@ def gravity_error(values, s, config):
     return values.get("scale", 0.0) * g
 
 
-def payload(values, s, config, eps: float = 1e-4):
+def body_regressor(s: Samples, body: int) -> torch.Tensor:
+    """(N, 7, 10) inverse-dynamics regressor of one body at the samples (cached)."""
+    from realm_ms.agents.effects.inertial import regressor
+
+    return s.cached(f"regressor{body}", lambda: regressor(s.arm, s.q, s.qd, s.qdd, body))
+
+
+def payload(values, s, config):
+    from realm_ms.agents.effects.payload import payload_pi
+
     m = values.get("mass", 0.0)
     if m == 0:
         return torch.zeros_like(s.q)
-    com = torch.tensor([values.get(f"com_{a}", o) for a, o in zip("xyz", config.offset)], dtype=torch.float64)
-    arm = s.arm
-
-    def geometry():  # tip Jacobian and rotation at q, q + eps q̇, q - eps q̇ (independent of the payload)
-        out = []
-        for q in (s.q, s.q + eps * s.qd, s.q - eps * s.qd):
-            frames = arm.link_frames(q)
-            out.append((arm.jacobian(q, frames), (frames[:, -1] @ arm.tip_offset)[:, :3, :3]))
-        return out
-
-    geo = s.cached("payload_geometry", geometry)
-
-    def jp(jac, rot):  # translational Jacobian of the point at ``com`` (flange frame)
-        r = rot @ com
-        return jac[:, :3] + torch.linalg.cross(jac[:, 3:], r[:, :, None].expand_as(jac[:, 3:]), dim=1)
-
-    j0 = jp(*geo[0])
-    jdot_qd = ((jp(*geo[1]) - jp(*geo[2])) @ s.qd[..., None])[..., 0] / (2 * eps)
-    acc = (j0 @ s.qdd[..., None])[..., 0] + jdot_qd
-    force = m * (acc - arm.gravity.to(torch.float64))
-    return (j0.transpose(1, 2) @ force[..., None])[..., 0]
-
-
-def link_torques(s: Samples) -> torch.Tensor:
-    """(7 links, N, 7 joints): each link's own inverse dynamics (the others massless)."""
-    def build():
-        arm = s.arm
-        masses, inertias = arm.masses.clone(), arm.inertias.clone()
-        out = []
-        try:
-            for k in range(7):
-                keep = torch.zeros_like(masses)
-                keep[k] = 1.0
-                arm.masses = masses * keep
-                arm.inertias = inertias * keep[:, None, None]
-                out.append(arm.rnea(s.q, s.qd, s.qdd))
-        finally:
-            arm.masses, arm.inertias = masses, inertias
-        return torch.stack(out)
-    return s.cached("links", build)
+    f64 = lambda keys, d: torch.tensor([[values.get(k, x) for k, x in zip(keys, d)]], dtype=torch.float64)  # noqa: E731
+    com = f64([f"com_{a}" for a in "xyz"], config.offset)
+    gyr = f64([f"gyr_{a}" for a in "xyz"], (0.0, 0.0, 0.0))
+    pi = payload_pi(torch.tensor([m], dtype=torch.float64), com, gyr, s.arm.tip_offset.to(torch.float64))
+    return body_regressor(s, 6) @ pi[0]
 
 
 def link_mass(values, s, config):
-    scale = _vec(values, "s")
-    return torch.einsum("k,knj->nj", scale, link_torques(s))
+    from realm_ms.agents.effects import inertial
+    from realm_ms.agents.effects.link_mass import COM_KEYS, SHEAR_KEYS, STRETCH_KEYS, corrected
+
+    names = ("s",) + COM_KEYS + STRETCH_KEYS + SHEAR_KEYS
+    v = torch.stack([_vec(values, k) for k in names], -1)  # (7 links, 10)
+    if not bool((v != 0).any()):
+        return torch.zeros_like(s.q)
+    arm = s.arm
+    m0, c0, i0 = (x.to(torch.float64) for x in (arm.masses, arm.coms, arm.inertias))
+    d = inertial.standard(*corrected(m0, c0, i0, v)) - inertial.standard(m0, c0, i0)  # (7, 10), 0 where unchanged
+    # all links' regressors side by side, (N, 7, 70): one product per evaluation
+    y = s.cached("link_regressors", lambda: torch.cat([inertial.regressor(arm, s.q, s.qd, s.qdd, k) for k in range(7)], -1))
+    return y @ d.reshape(-1)
 
 
 #: effect name -> torque-space term
@@ -145,8 +131,5 @@ TERMS: dict[str, Callable] = {
     "payload": payload, "gravity_comp_error": gravity_error, "link_mass": link_mass,
 }
 
-#: torque-space-only parameter specs (effects not in the simulation library)
-EXTRA_SPECS = {
-    "link_mass": [ParamSpec("s", "1", 0.2, -0.9, 2.0, 0.0, doc="relative change of link k's mass, first moment and "
-                            "inertia (link k moves with joint k)")],
-}
+#: torque-space-only parameter specs (effects not in the simulation library; none at present)
+EXTRA_SPECS: dict[str, list[ParamSpec]] = {}

@@ -33,7 +33,7 @@ def terms_of(model: RobotModel | None, log=print) -> list[Term]:
         if fx.name in TRACKING_ONLY:
             log(f"note: {fx.name} is a tracking effect (needs q_cmd); it is ignored in torque space")
             continue
-        out.append(Term.make(fx.name, fx.values()))
+        out.append(Term.make(fx.name, fx.values(), _config(fx)))
     extra = (model.provenance.get("torque_space") or {}) if model.provenance else {}
     for name, values in extra.items():
         out.append(Term.make(name, values))
@@ -47,7 +47,7 @@ def model_of(terms: list[Term], base: RobotModel | None = None) -> RobotModel:
 
     base = (base or RobotModel()).copy()
     keep = [fx for fx in base.effects if fx.name in TRACKING_ONLY]
-    fx = [make_effect(t.name, t.values) for t in terms if t.name in EFFECTS]
+    fx = [make_effect(t.name, t.values, t.config_dict()) for t in terms if t.name in EFFECTS]
     extra = {t.name: dict(t.values) for t in terms if t.name not in EFFECTS}
     prov = dict(base.provenance)
     prov.pop("torque_space", None)
@@ -56,8 +56,20 @@ def model_of(terms: list[Term], base: RobotModel | None = None) -> RobotModel:
     return RobotModel(sorted(keep + fx, key=lambda f: f.order), base.gains, base.joint_physics, base.physics_hz, prov)
 
 
+def _config(fx) -> dict:
+    from dataclasses import asdict
+
+    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
+
+
+def _config_names(name: str) -> set[str]:
+    from dataclasses import fields
+
+    return {f.name for f in fields(EFFECTS.get(name).Config)} if name in EFFECTS else set()
+
+
 def _copy(terms: list[Term]) -> list[Term]:
-    return [Term.make(t.name, dict(t.values)) for t in terms]
+    return [Term.make(t.name, dict(t.values), t.config_dict()) for t in terms]
 
 
 def compare(trajs: list[Trajectory], model: RobotModel | None = None) -> dict:
@@ -75,8 +87,9 @@ def diagnose(train, held, model=None, candidates=None, config: DiagnoseConfig | 
     tr, he = sets or _sets(train, held)
     base_terms = terms_of(model, log)
     present = {t.name for t in base_terms}
-    if candidates is None:  # the config's library candidates + the torque-space-only terms
-        candidates = [n for n in TERMS if n in cfg.candidates or n not in EFFECTS]
+    if candidates is None:  # the config's library candidates + the torque-space-only terms + those
+        # position space screens only on request (link_mass: cheap here, a regressor fit)
+        candidates = [n for n in TERMS if n in cfg.candidates or n not in EFFECTS or not EFFECTS.get(n).screened]
     names = [n for n in candidates if n not in present and n not in TRACKING_ONLY]
     base_tr, _ = rmse(tr, base_terms)
     base_he, per_he = rmse(he, base_terms)
@@ -108,13 +121,15 @@ def diagnose(train, held, model=None, candidates=None, config: DiagnoseConfig | 
 
 
 def fit(train, held, add: str, model=None, refit: bool = True, log=print, sets=None) -> dict:
-    from realm_ms.sysid.effect_spec import split_specs
+    from realm_ms.sysid.effect_spec import _value, split_specs
 
     tr, he = sets or _sets(train, held)
     base_terms = terms_of(model, log)
     added = []
     for name, kv in split_specs(add):
-        t = Term.make(name)
+        cfg_names = _config_names(name)
+        t = Term.make(name, config={k: _value(v, k) for k, v in kv.items() if k in cfg_names})
+        kv = {k: v for k, v in kv.items() if k not in cfg_names}
         unknown = [k for k in kv if k not in t.values]
         if unknown:
             raise ValueError(f"{name}: unknown or fixed parameter(s) {unknown} in torque space; free: {list(t.values)}")

@@ -25,10 +25,10 @@ def register_scene(scene: "TabletopScene") -> "TabletopScene":
 
 def add_lights(env, table_top_z, ambient, sun_dir, sun_rgb, fill_rgb, lamps) -> None:
     """Ambient + a shadow-casting sun + a fill light + point lamps ``(x, y, z above table, r, g, b)``,
-    all scaled by ``realm_ms.rendering.light_gain(env.shader)`` (rt/raster exposure balance)."""
+    all scaled by ``realm_ms.rendering.light_gain(env.cameras.shader)`` (rt/raster exposure balance)."""
     from realm_ms.rendering import light_gain
 
-    g = light_gain(getattr(env, "shader", "default"))
+    g = light_gain(env.cameras.shader)
     s = env.scene
     s.set_ambient_light([g * c for c in ambient])
     s.add_directional_light(list(sun_dir), [g * c for c in sun_rgb], shadow=env.enable_shadow, shadow_scale=3, shadow_map_size=2048)
