@@ -74,8 +74,8 @@ class Recipe:
     replan_every: int = 10
     workers: int = 2
     # fine-tuning under the perturbation that hurt most
-    finetune_demos: int = 15
-    finetune_steps: int = 800
+    finetune_demos: int = 10
+    finetune_steps: int = 400
     device: str = "cpu"
     threads: int | None = None
 
