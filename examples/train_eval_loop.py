@@ -314,14 +314,22 @@ def cell_counts(run: Path) -> dict[tuple[str, str], tuple[int, int]]:
     return {k: (v[0], v[1]) for k, v in out.items()}
 
 
-def worst_perturbation(table: Path) -> str:
-    """The perturbation with the lowest success rate over the tasks (ties: lowest mean progression)."""
+def observable(perturbation: str, language: bool) -> bool:
+    """Whether a policy can see the perturbation: S-* and SB-* change the task only through the
+    instruction, which a policy without a language input (ACT) never reads, so no demonstration can
+    teach it those; every other factor changes what the cameras or the robot see."""
+    return language or not perturbation.split("+")[0].startswith("S")
+
+
+def worst_perturbation(table: Path, language: bool) -> str:
+    """The perturbation the policy can observe (``observable``) with the lowest success rate over the
+    tasks (ties: lowest mean progression)."""
     from realm_ms.eval.records import latest_by_key, read_records
     from realm_ms.task_index import DEFAULT
 
     score: dict[str, list[float]] = {}
     for rec in latest_by_key(read_records(table / "records.jsonl")).values():
-        if rec.get("status", "ok") == "ok" and rec["perturbation"] != DEFAULT:
+        if rec.get("status", "ok") == "ok" and rec["perturbation"] != DEFAULT and observable(rec["perturbation"], language):
             score.setdefault(rec["perturbation"], []).append((float(rec["success"]), float(rec["progression"])))
     if not score:
         raise SystemExit(f"no perturbed episodes in {table}: cannot choose the perturbation to fine-tune on")
@@ -413,7 +421,7 @@ def main(argv=None) -> int:
     default = timed("default", evaluate, r, ckpt, out / "eval" / "default", ["Default"], r.eval_episodes)
     stage(f"5/8 realm eval: the 16-setting table, {r.table_episodes} episodes per cell")
     table = timed("table", evaluate, r, ckpt, out / "eval" / "table", list(r.table_perturbations), r.table_episodes)
-    worst = worst_perturbation(table)
+    worst = worst_perturbation(table, language=False)  # ACT takes no instruction
     stage(f"6/8 realm eval under {worst} (hurt most), {r.eval_episodes} episodes per task")
     base_worst = timed("worst", evaluate, r, ckpt, out / "eval" / "worst", [worst], r.eval_episodes)
     stage(f"7/8 fine-tune: expert demos under {worst} + the original demos, {r.finetune_steps} steps from the checkpoint")
