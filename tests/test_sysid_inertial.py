@@ -110,10 +110,8 @@ def test_link_term_matches_mujoco_for_any_mass_com_and_shape():
     stretched inertia): the regressor, the coordinates and the build target's principal-axes
     conversion agree."""
     pytest.importorskip("mujoco")
-    import mujoco
-
     from realm_ms.sysid.locked_urdf import flange_offset_in_link7
-    from realm_ms.sysid.reference_mujoco import MujocoBuildTarget, MujocoConfig, build_model
+    from realm_ms.sysid.reference_mujoco import MujocoBuildTarget, MujocoConfig, build_model, inverse_dynamics
     from realm_ms.sysid.torque.terms import Samples, link_mass
 
     values = {"s4": 0.3, "dcx4": 0.04, "dcy4": -0.03, "dcz4": 0.01, "ax4": 0.4, "ay4": -0.3, "az4": 0.2,
@@ -128,12 +126,7 @@ def test_link_term_matches_mujoco_for_any_mass_com_and_shape():
     for _ in range(3):
         q = np.array([0, -0.6, 0, -2.4, 0, 1.9, 0]) + rng.normal(0, 0.3, 7)
         qd, qdd = rng.normal(0, 0.5, 7), rng.normal(0, 3, 7)
-        tau = []
-        for m in (changed, nominal):
-            d = mujoco.MjData(m)
-            d.qpos[:], d.qvel[:], d.qacc[:] = q, qd, qdd
-            mujoco.mj_inverse(m, d)
-            tau.append(d.qfrc_inverse.copy())
+        tau = [inverse_dynamics(m, q, qd, qdd) for m in (changed, nominal)]
         t = lambda x: torch.as_tensor(x)[None]  # noqa: E731
         ours = link_mass(values, Samples(t(q), t(qd), t(qdd), arm), fx.config)
         np.testing.assert_allclose(ours.numpy()[0], tau[0] - tau[1], atol=2e-3)

@@ -120,11 +120,10 @@ def test_native_effect_spec_parsing():
 def test_payload_term_matches_a_mujoco_payload_body():
     """The torque-space payload term (point mass at its centre of mass) against MuJoCo's own
     inverse dynamics of the native plant with a payload body, at random states."""
-    import mujoco
     import torch
 
     from realm_ms.agents.effects import make_effect
-    from realm_ms.sysid.reference_mujoco import MujocoConfig
+    from realm_ms.sysid.reference_mujoco import MujocoConfig, inverse_dynamics
     from realm_ms.sysid.reference_native import NativeEffects, build_native_model
     from realm_ms.sysid.torque.space import torque_arm
     from realm_ms.sysid.torque.terms import Samples, payload
@@ -137,12 +136,7 @@ def test_payload_term_matches_a_mujoco_payload_body():
     for _ in range(3):
         q = np.array([0, -0.6, 0, -2.4, 0, 1.9, 0]) + rng.normal(0, 0.3, 7)
         qd, qdd = rng.normal(0, 0.5, 7), rng.normal(0, 3, 7)
-        tau = []
-        for m in (with_p, nominal):
-            d = mujoco.MjData(m)
-            d.qpos[:], d.qvel[:], d.qacc[:] = q, qd, qdd
-            mujoco.mj_inverse(m, d)
-            tau.append(d.qfrc_inverse.copy())
+        tau = [inverse_dynamics(m, q, qd, qdd) for m in (with_p, nominal)]
         t = lambda x: torch.as_tensor(x)[None]  # noqa: E731
         ours = payload({"mass": 0.8, "com_x": 0.12, "com_y": -0.03, "com_z": 0.05}, Samples(t(q), t(qd), t(qdd), arm), cfg)
         np.testing.assert_allclose(ours.numpy()[0], tau[0] - tau[1], atol=2e-3)

@@ -48,6 +48,17 @@ class MujocoConfig:
             raise ValueError("substeps must be >= 1 and law_hz > 0")
 
 
+def inverse_dynamics(model, q, qd, qdd):
+    """MuJoCo's joint torques for (q, qd, qdd) on ``model`` (``mj_inverse``): the oracle the effects'
+    inverse-dynamics terms are checked against."""
+    import mujoco
+
+    d = mujoco.MjData(model)
+    d.qpos[:], d.qvel[:], d.qacc[:] = q, qd, qdd
+    mujoco.mj_inverse(model, d)
+    return d.qfrc_inverse.copy()
+
+
 def build_model(config: MujocoConfig | None = None, urdf: str | None = None):
     """MjModel of the locked arm (7 hinge joints, no geometry, no joint damping or friction)."""
     import mujoco
