@@ -115,10 +115,9 @@ def child_env(threads: int | None = 1) -> dict:
 
 
 def kept_episodes(root: Path) -> int:
-    side = root / "meta" / "realm_episodes.jsonl"
-    if not side.exists():
-        return 0
-    return sum(1 for line in side.read_text().splitlines() if line.strip() and json.loads(line).get("kept"))
+    from realm_ms.lerobot.export import read_sidecar
+
+    return sum(bool(rec.get("kept")) for rec in read_sidecar(root))
 
 
 def export_demos(r: Recipe, jobs: list[tuple[str, str, int, int, Path]]) -> list[Path]:
@@ -287,10 +286,9 @@ def select_checkpoint(r: Recipe, train_run: Path, perturbations: list[str], out:
     for d in sorted(p for p in (train_run / "checkpoints").iterdir() if p.name.isdigit()):
         run = evaluate(r, d / "pretrained_model", out / f"val_{train_run.name}_{d.name}", perturbations, r.val_episodes,
                        seed=VALIDATION_SEED)
-        recs = [x for x in finished_records(run)]
-        rows.append({"step": int(d.name), "checkpoint": str(d / "pretrained_model"), "episodes": len(recs),
-                     "successes": sum(bool(x["success"]) for x in recs),
-                     "progression": sum(float(x["progression"]) for x in recs) / max(1, len(recs))})
+        o = run_metrics(run)["overall"]
+        rows.append({"step": int(d.name), "checkpoint": str(d / "pretrained_model"), "episodes": o["episodes"],
+                     "successes": o["successes"], "progression": o["mean_progression"]})
     best = max(rows, key=lambda x: (x["successes"] / max(1, x["episodes"]), x["progression"], x["step"]))
     print(f"validation ({r.val_episodes} episodes per task and setting, seeds from {VALIDATION_SEED}): "
           + ", ".join(f"step {x['step']}: {x['successes']}/{x['episodes']} prog {x['progression']:.2f}" for x in rows)
@@ -298,20 +296,18 @@ def select_checkpoint(r: Recipe, train_run: Path, perturbations: list[str], out:
     return Path(best["checkpoint"]), rows
 
 
-def finished_records(run: Path) -> list[dict]:
-    from realm_ms.eval.records import latest_by_key, read_records
+def run_metrics(run: Path) -> dict:
+    """The run's metrics (`realm eval`'s own aggregation, as in its metrics.json)."""
+    from realm_ms.eval.metrics import compute_metrics
+    from realm_ms.eval.records import read_records
 
-    return [x for x in latest_by_key(read_records(run / "records.jsonl")).values() if x.get("status", "ok") == "ok"]
+    return compute_metrics(read_records(run / "records.jsonl"))
 
 
 def cell_counts(run: Path) -> dict[tuple[str, str], tuple[int, int]]:
     """(task, perturbation) -> (successes, episodes) over the run's finished records."""
-    out: dict[tuple[str, str], list[int]] = {}
-    for rec in finished_records(run):
-        c = out.setdefault((rec["task"], rec["perturbation"]), [0, 0])
-        c[0] += bool(rec["success"])
-        c[1] += 1
-    return {k: (v[0], v[1]) for k, v in out.items()}
+    return {(t, p): (c["successes"], c["episodes"]) for t, cells in run_metrics(run)["per_cell"].items()
+            for p, c in cells.items()}
 
 
 def observable(perturbation: str, language: bool) -> bool:
@@ -324,16 +320,12 @@ def observable(perturbation: str, language: bool) -> bool:
 def worst_perturbation(table: Path, language: bool) -> str:
     """The perturbation the policy can observe (``observable``) with the lowest success rate over the
     tasks (ties: lowest mean progression)."""
-    from realm_ms.eval.records import latest_by_key, read_records
     from realm_ms.task_index import DEFAULT
 
-    score: dict[str, list[float]] = {}
-    for rec in latest_by_key(read_records(table / "records.jsonl")).values():
-        if rec.get("status", "ok") == "ok" and rec["perturbation"] != DEFAULT and observable(rec["perturbation"], language):
-            score.setdefault(rec["perturbation"], []).append((float(rec["success"]), float(rec["progression"])))
-    if not score:
+    per = {p: m for p, m in run_metrics(table)["per_perturbation"].items() if p != DEFAULT and observable(p, language)}
+    if not per:
         raise SystemExit(f"no perturbed episodes in {table}: cannot choose the perturbation to fine-tune on")
-    return min(score, key=lambda p: tuple(sum(x) / len(score[p]) for x in zip(*score[p])))
+    return min(per, key=lambda p: (per[p]["success_rate"], per[p]["mean_progression"]))
 
 
 # ---------------------------------------------------------------- summary
