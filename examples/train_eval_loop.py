@@ -313,8 +313,9 @@ def cell_counts(run: Path) -> dict[tuple[str, str], tuple[int, int]]:
 def observable(perturbation: str, language: bool) -> bool:
     """Whether a policy can see the perturbation: S-* and SB-* change the task only through the
     instruction, which a policy without a language input (ACT) never reads, so no demonstration can
-    teach it those; every other factor changes what the cameras or the robot see."""
-    return language or not perturbation.split("+")[0].startswith("S")
+    teach it those; every other factor changes what the cameras or the robot see (a composition is
+    observable when any of its parts is)."""
+    return language or any(not part.startswith("S") for part in perturbation.split("+"))
 
 
 def worst_perturbation(table: Path, language: bool) -> str:

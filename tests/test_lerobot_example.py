@@ -70,3 +70,10 @@ def test_train_eval_loop_quick_runs_every_stage_and_resumes(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert printed.count("exists") >= 2  # both checkpoints kept
     assert {run: len(_records(out / "eval" / run)) for run in sizes} == sizes
+
+
+def test_fine_tuning_skips_what_a_language_blind_policy_cannot_observe():
+    ex = _example()
+    assert not any(ex.observable(p, language=False) for p in ("S-LANG", "SB-NOUN", "S-LANG+SB-VRB"))
+    assert all(ex.observable(p, language=False) for p in ("V-AUG", "VB-POSE", "VSB-NOBJ", "B-HOBJ", "S-LANG+V-AUG"))
+    assert ex.observable("SB-NOUN", language=True)
