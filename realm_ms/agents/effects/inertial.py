@@ -67,24 +67,12 @@ def shape_matrix(stretch: torch.Tensor, shear: torch.Tensor) -> torch.Tensor:
 
 # ---------------------------------------------------------------------------- regressor
 def _kinematics(arm, q: torch.Tensor, qd: torch.Tensor, qdd: torch.Tensor | None, gravity: bool, frames=None):
-    """Per body: rotation, origin, joint axis (world), angular velocity/acceleration, origin
-    acceleration (with -g as the base's, as in ``ArmModel.rnea``)."""
+    """Per body: rotation, origin, joint axis (world), and ``ArmModel.motion``'s angular
+    velocity/acceleration and origin acceleration (with -g as the base's)."""
     frames = arm.link_frames(q) if frames is None else frames
-    rot, p = frames[..., :3, :3], frames[..., :3, 3]
-    z = (rot @ arm.axes.to(q.dtype)[..., None])[..., 0]
-    cross = torch.linalg.cross
-    w_rel = z * qd[..., None]
-    w = torch.cumsum(w_rel, dim=1)
-    dw_terms = cross(w - w_rel, w_rel, dim=-1)
-    if qdd is not None:
-        dw_terms = dw_terms + z * qdd[..., None]
-    dw = torch.cumsum(dw_terms, dim=1)
-    d = torch.diff(p, dim=1)
-    trans = cross(dw[:, :-1], d, dim=-1) + cross(w[:, :-1], cross(w[:, :-1], d, dim=-1), dim=-1)
-    g = arm.gravity.to(q.dtype)
-    a0 = (-g if gravity else torch.zeros_like(g)).expand(q.shape[0], 1, 3)
-    a = torch.cumsum(torch.cat([a0, trans], dim=1), dim=1)
-    return rot, p, z, w, dw, a
+    links = arm.links(frames, dynamics=False)
+    w, dw, a = arm.motion(links, qd, gravity, qdd)
+    return frames[..., :3, :3], links.p, links.z, w, dw, a
 
 
 def regressor(arm, q: torch.Tensor, qd: torch.Tensor, qdd: torch.Tensor | None, body: int,
