@@ -145,3 +145,30 @@ def test_export_of_a_realm_eval_run_resimulates_its_records(tmp_path):
 
     ds = LeRobotDataset("realm/from_eval", root=out, video_backend="pyav")
     assert ds.num_episodes == len(records) and ds.num_frames == sum(r["steps"] for r in records)
+
+
+def test_binary_gripper_labels_keep_the_episode_and_binarise_the_grasp(tmp_path, capsys):
+    """``--gripper-labels binary``: the same episode (states, joint targets) as the commands export,
+    with action[7] = 1 exactly where the expert's gentle pinch commanded any closing (0.03 ... 0.3);
+    a resume with the other convention is refused."""
+    from realm_ms.cli import main
+    from realm_ms.lerobot.export import ExportConfig, export_dataset, read_sidecar
+
+    steps = 75  # the expert starts closing on the apple around step 50
+    out = {}
+    for labels in ("command", "binary"):
+        cfg = ExportConfig(out=tmp_path / labels, tasks=[TASKS[0]], seed=3, width=32, height=24, max_steps=steps,
+                           progress=False, gripper_labels=labels)
+        export_dataset(cfg)
+        data = _dataset(cfg).hf_dataset.with_format("numpy")
+        out[labels] = (np.stack(data["observation.state"]), np.stack(data["action"]))
+        assert read_sidecar(cfg.out)[0]["gripper_labels"] == labels
+    (s_cmd, a_cmd), (s_bin, a_bin) = out["command"], out["binary"]
+    np.testing.assert_array_equal(s_cmd, s_bin)
+    np.testing.assert_array_equal(a_cmd[:, :7], a_bin[:, :7])
+    closing = a_cmd[:, 7] > 0.01
+    assert closing.any() and (a_cmd[closing, 7] < 0.5).all(), "the expert's gentle pinch was not in the episode"
+    np.testing.assert_array_equal(a_bin[:, 7], closing.astype(np.float32))
+    assert main(["export", "--tasks", TASKS[0], "--episodes", "1", "--seed", "3", "--width", "32", "--height", "24",
+                 "--out", str(tmp_path / "binary"), "--repo-id", "realm/binary"]) == 2
+    assert "--gripper-labels binary" in capsys.readouterr().err

@@ -39,13 +39,18 @@ def test_link4_mass_is_ranked_first_and_fitted_to_the_floor(link4):
     assert d["verdict"] == "found"
 
 
-def test_link_centre_of_mass_fits_with_fit_com(tmp_path):
+@pytest.fixture(scope="module")
+def link4_com(tmp_path_factory):
+    return _synth(tmp_path_factory.mktemp("lmc") / "l4c", "link4_inertial")
+
+
+def test_link_centre_of_mass_fits_with_fit_com(link4_com):
     """Link 4 heavier *and* its CoM 4 cm / -3 cm off: mass alone stays above 2x the floor, mass +
     CoM (``link_mass:link=4,fit_com=true``) reaches it and finds the shift."""
     from realm_ms.sysid.data_io import load_split
     from realm_ms.sysid.torque import verbs
 
-    train, held = load_split(_synth(tmp_path / "l4c", "link4_inertial"))
+    train, held = load_split(link4_com)
     quiet = lambda *a: None  # noqa: E731
     mass_only = verbs.fit(train, held, "link_mass:link=4", log=quiet)
     with_com = verbs.fit(train, held, "link_mass:link=4,fit_com=true", log=quiet)
@@ -57,6 +62,27 @@ def test_link_centre_of_mass_fits_with_fit_com(tmp_path):
     # (m c), so compare first moments: (1 + s) (c0 + dc) against 1.3 (c0 + shift)
     from realm_ms.sysid.torque.space import torque_arm
 
+    c0 = torque_arm().coms[3].numpy()
+    got = (1 + p["link_mass.s4"]) * (c0 + [p["link_mass.dcx4"], p["link_mass.dcy4"], p["link_mass.dcz4"]])
+    np.testing.assert_allclose(got[:2], 1.3 * (c0[:2] + [0.04, -0.03]), atol=0.01)
+
+
+def test_auto_finds_a_shifted_link_centre_of_mass(link4_com):
+    """Torque-space ``auto`` screens link CoMs too (``link_mass:fit_com=true``, all links): on the
+    heavier, off-centre link 4 it takes that step (mass scales alone make held-out worse) and stops
+    at the floor with link 4's first moment where the plant's is."""
+    from realm_ms.sysid.auto import AutoConfig
+    from realm_ms.sysid.data_io import load_split
+    from realm_ms.sysid.diagnose import DiagnoseConfig
+    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.torque.space import torque_arm
+
+    train, held = load_split(link4_com)
+    cfg = AutoConfig(diagnose=DiagnoseConfig(candidates=("payload", "gravity_comp_error")))
+    a = verbs.auto(train, held, config=cfg, log=lambda *a: None)
+    assert [s["effect"] for s in a["steps"]] == ["link_mass:fit_com=true"], a["steps"]
+    assert a["final"]["verdict"] == "at_floor"
+    p = a["steps"][0]["params"]
     c0 = torque_arm().coms[3].numpy()
     got = (1 + p["link_mass.s4"]) * (c0 + [p["link_mass.dcx4"], p["link_mass.dcy4"], p["link_mass.dcz4"]])
     np.testing.assert_allclose(got[:2], 1.3 * (c0[:2] + [0.04, -0.03]), atol=0.01)

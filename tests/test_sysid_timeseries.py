@@ -48,8 +48,24 @@ def test_split_is_seeded_by_trajectory():
     assert [t.name for t in a[1]] == [t.name for t in b[1]] and len(a[1]) == 3
     assert {t.name for t in a[0]} | {t.name for t in a[1]} == {f"t{i}" for i in range(10)}
     assert [t.name for t in split(trajs, 0.3, seed=4)[1]] != [t.name for t in a[1]]
-    with pytest.raises(DataError, match="at least 2"):
-        split(trajs[:1])
+    with pytest.raises(DataError, match="needs >= 20 s"):
+        split(trajs[:1])  # 4 s
+
+
+def test_a_single_long_log_is_split_into_time_blocks():
+    """One 65 s recording: 6 contiguous blocks of ~10.8 s, 2 held out (seeded); together they are the
+    log, sample for sample, and every array is cut at the same rows."""
+    long = traj(n=65 * 15, name="franka", tau=None)
+    long.tau = np.random.default_rng(0).normal(size=(len(long.t), 7))
+    train, held = split([long], 0.3, seed=0)
+    assert len(train) == 4 and len(held) == 2
+    parts = sorted(train + held, key=lambda b: b.meta["block_start_s"])
+    assert all(b.meta["block_of"] == "franka" and b.name.startswith("franka[") for b in parts)
+    np.testing.assert_array_equal(np.concatenate([b.q for b in parts]), long.q)
+    np.testing.assert_array_equal(np.concatenate([b.tau for b in parts]), long.tau)
+    np.testing.assert_allclose(np.concatenate([b.t + b.meta["block_start_s"] for b in parts]), long.t)
+    assert all(b.t[0] == 0 and b.duration >= 10 for b in parts)
+    assert [b.name for b in split([long], 0.3, seed=0)[1]] == [b.name for b in held]
 
 
 def test_npz_round_trip_and_directory_layouts(tmp_path):

@@ -140,3 +140,19 @@ def test_payload_term_matches_a_mujoco_payload_body():
         t = lambda x: torch.as_tensor(x)[None]  # noqa: E731
         ours = payload({"mass": 0.8, "com_x": 0.12, "com_y": -0.03, "com_z": 0.05}, Samples(t(q), t(qd), t(qdd), arm), cfg)
         np.testing.assert_allclose(ours.numpy()[0], tau[0] - tau[1], atol=2e-3)
+
+
+def test_one_long_torque_log_enters_as_one_file(tmp_path, capsys):
+    """A robot's single recording (one .npz, t/q/qd/tau, no q_cmd) goes straight into the workbench:
+    cut into time blocks, some held out, and MuJoCo's frictionloss is still the first suspect."""
+    import json
+
+    root = _synth(tmp_path / "one", "frictionloss", n=(1, 1), duration=21.0)
+    (log,) = sorted((root / "train").glob("*.npz"))
+    code = main(["sysid", "diagnose", str(log), "--candidates", "coulomb_friction,armature,payload",
+                 "--json", str(tmp_path / "d.json")])
+    assert code == 0, capsys.readouterr().err
+    d = json.loads((tmp_path / "d.json").read_text())
+    assert d["unit"] == "N·m" and len(d["split"]["train"]) == 1 and len(d["split"]["heldout"]) == 1
+    assert all(n.startswith(log.stem + "[") for n in d["split"]["train"] + d["split"]["heldout"])
+    assert d["suspects"][0]["effect"] == "coulomb_friction"

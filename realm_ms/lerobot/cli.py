@@ -37,6 +37,11 @@ def add_parser(sub) -> None:
                    help="default (raster) | rt | rt-med | rt-fast | minimal (default: default)")
     p.add_argument("--from-eval", type=Path, default=None, metavar="RUN",
                    help="re-simulate the episodes of a `realm eval` run (its records.jsonl) instead of --tasks")
+    from realm_ms.lerobot.export import GRIPPER_LABELS
+
+    p.add_argument("--gripper-labels", default="command", choices=GRIPPER_LABELS,
+                   help="action[7]: the gripper command as sent (default), or binary (1 wherever the policy closed "
+                        "at all: DROID's and REALM's convention, what a policy should learn)")
     p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes, >= 1 (resume granularity)")
     p.set_defaults(func=run)
 
@@ -71,6 +76,7 @@ def run(args) -> int:
             out=args.out, tasks=tasks, episodes=1 if args.episodes is None else args.episodes, perturbations=args.perturbations, seed=args.seed,
             policy=args.policy, repo_id=args.repo_id, success_only=args.success_only, width=args.width,
             height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=args.commit_every,
+            gripper_labels=args.gripper_labels,
         )
         summary = export_eval_run(args.from_eval, cfg) if args.from_eval is not None else export_dataset(cfg)
     except (ExportError, UnknownNameError) as e:

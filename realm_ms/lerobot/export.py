@@ -24,6 +24,9 @@ from realm_ms.lerobot.features import DEFAULT_SIZE, FPS, ROBOT_TYPE, dataset_fea
 from realm_ms.lerobot.rollout import DEFAULT_PERTURBATION
 
 SIDECAR = "meta/realm_episodes.jsonl"
+#: ``action[7]`` conventions: the command the policy sent, or DROID's binary close intent
+GRIPPER_LABELS = ("command", "binary")
+BINARY_GRIPPER_THRESHOLD = 0.01  # a command above this is a close intent (the expert's gentle pinch starts at 0.03)
 VIDEO_BACKEND = "pyav"  # decoding backend recorded on the writer; also skips torchcodec's noisy probe
 
 
@@ -47,6 +50,9 @@ class ExportConfig:
     shader: str = "default"
     commit_every: int = 1  # finalize + re-open every N episodes (crash-safe resume granularity)
     progress: bool = True
+    # "binary": action[7] = 1 wherever the policy commanded any closing, else 0 (DROID's teleoperated
+    # trigger and REALM's binary gripper); "command": the gripper command as sent
+    gripper_labels: str = "command"
 
     def __post_init__(self):
         from realm_ms.validate import InputError, check_seed
@@ -63,6 +69,8 @@ class ExportConfig:
             raise ExportError(f"--episodes {self.episodes}: at most 100000 per (task, perturbation)")
         if self.max_steps is not None and (isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1):
             raise ExportError(f"--max-steps must be >= 1 (got {self.max_steps!r}); leave it out for the task horizon")
+        if self.gripper_labels not in GRIPPER_LABELS:
+            raise ExportError(f"--gripper-labels {self.gripper_labels!r}: choose one of {', '.join(GRIPPER_LABELS)}")
         if self.width < 16 or self.height < 16:
             raise ExportError(f"image size {self.width}x{self.height} is too small (>= 16x16)")
         if self.width > 4096 or self.height > 4096:
@@ -90,6 +98,7 @@ class EpisodeRecord:
     episode_index: int | None = None  # index in the dataset when kept
     params: list | None = None  # the drawn perturbation parameters per sub-env (info["perturbation"]["params"])
     config: dict | None = None  # the env's RealmEnvConfig.to_dict(): RealmEnvConfig.from_dict re-creates it
+    gripper_labels: str = "command"  # convention of action[7] (ExportConfig.gripper_labels)
 
 
 # Hugging Face Hub repo ids: OWNER/NAME, letters, digits, '-', '_', '.'; no '--' or '..'; <= 96 chars
@@ -289,7 +298,26 @@ def plan_from_records(records: list[dict], done: list[dict], max_steps: int | No
     return list(cells.values())
 
 
+def gripper_label(action, labels: str):
+    """``action`` with its gripper entry in the ``labels`` convention (``GRIPPER_LABELS``).
+
+    Why "binary": the expert pinches gently (it commands the measured width + 0.02, ~20 N per pad),
+    so its gripper commands on a grasp are 0.03-0.3 and depend on the object's width to 0.02: a
+    learned policy's regression error is larger than that margin, and it ends up holding the pads at
+    the object's surface without force. Binary labels carry what the demo means, close or open."""
+    import numpy as np
+
+    a = np.array(action, dtype=np.float32).reshape(8)
+    if labels == "binary":
+        a[7] = 1.0 if a[7] > BINARY_GRIPPER_THRESHOLD else 0.0
+    return a
+
+
 def _open(cfg: ExportConfig) -> tuple[_Writer, list[dict]]:
+    other = sorted({r.get("gripper_labels", "command") for r in read_sidecar(cfg.out) if r["kept"]} - {cfg.gripper_labels})
+    if other:
+        raise ExportError(f"{cfg.out} holds episodes with --gripper-labels {other[0]}; resume with the same "
+                          f"--gripper-labels or export to a new --out")
     writer = _Writer(cfg)
     # episodes whose sidecar line was written but whose save/commit never completed are forgotten
     done = [r for r in read_sidecar(writer.root)
@@ -323,14 +351,15 @@ def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]
                         policies[job.policy] = make_export_policy(job.policy, env, job.replan_every)
 
                     def on_frame(np_obs, action, progression, success, is_done, instruction):
-                        writer.add(dataset_frame(np_obs, action, progression, success, is_done, instruction))
+                        writer.add(dataset_frame(np_obs, gripper_label(action, cfg.gripper_labels), progression, success,
+                                                 is_done, instruction))
 
                     res = record_episode(env, policies[job.policy], job.seed, on_frame, max_steps=job.max_steps,
                                          perturbation_params=job.perturbation_params)
                     keep = res.success or not cfg.success_only
                     rec = EpisodeRecord(job.task, job.perturbation, job.seed, job.policy, res.instruction, res.steps,
                                         res.progression, res.success, keep, writer.num_episodes if keep else None,
-                                        (res.perturbation or {}).get("params"), env_config.to_dict())
+                                        (res.perturbation or {}).get("params"), env_config.to_dict(), cfg.gripper_labels)
                     _append_sidecar(root, rec)  # before the save: a crash mid-save is filtered on resume
                     if keep:
                         writer.save()
@@ -407,7 +436,9 @@ def write_card(cfg: ExportConfig, root: Path) -> Path:
         "",
         "DROID feature names: `observation.images.{exterior_1_left, exterior_2_left, wrist_left}` "
         f"({cfg.width}x{cfg.height} video, {FPS} fps), `observation.state` (7 joint positions + gripper position in [0, 1]), "
-        "`action` (7 absolute joint-position targets + gripper command in [0, 1], 1 = closed); the language "
+        "`action` (7 absolute joint-position targets + gripper command in [0, 1], 1 = closed"
+        + ("; binary: 1 wherever the policy closed the gripper at all" if cfg.gripper_labels == "binary" else "")
+        + "); the language "
         "instruction is the LeRobot task. Extras: `progression` and `success` after the frame's action, `next.done`.",
         "Per-episode metadata (env id, perturbation and its parameters, seed, policy, success, kept): "
         f"`{SIDECAR}`. Failed episodes are {'dropped' if cfg.success_only else 'kept'}.",

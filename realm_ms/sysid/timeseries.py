@@ -182,9 +182,40 @@ def validate(traj: Trajectory, q_limits: np.ndarray, where: str | None = None) -
     return Trajectory(traj.name, t - t[0], q, q_cmd, qd, tau, gripper, gripper_cmd, control_hz, dict(traj.meta))
 
 
+#: a single log is cut into contiguous blocks of at least this long (a held-out block holds one 8 s
+#: replay segment and its 1 s burn-in), at most MAX_BLOCKS of them
+MIN_BLOCK_S = 10.0
+MAX_BLOCKS = 10
+
+
+def blocks(traj: Trajectory, n: int) -> list[Trajectory]:
+    """``traj`` cut into ``n`` contiguous, disjoint blocks of equal duration, each named
+    ``NAME[t0-t1s]`` and timed from 0."""
+    edges = np.searchsorted(traj.t, np.linspace(traj.t[0], traj.t[-1], n + 1))
+    edges[-1] = len(traj.t)
+    out = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        cut = lambda x: None if x is None else x[a:b]  # noqa: E731
+        out.append(Trajectory(f"{traj.name}[{traj.t[a]:.1f}-{traj.t[b - 1]:.1f}s]", traj.t[a:b] - traj.t[a], traj.q[a:b],
+                              cut(traj.q_cmd), cut(traj.qd), cut(traj.tau), cut(traj.gripper), cut(traj.gripper_cmd),
+                              traj.control_hz, dict(traj.meta, block_of=traj.name, block_start_s=float(traj.t[a]))))
+    return out
+
+
 def split(trajs: list[Trajectory], heldout_fraction: float = 0.3, seed: int = 0) -> tuple[list[Trajectory], list[Trajectory]]:
     """Seeded split *by trajectory*: a permutation with ``numpy.random.default_rng(seed)`` of the
-    trajectories sorted by name; the first ``max(1, round(f * N))`` are held out. Needs N >= 2."""
+    trajectories sorted by name; the first ``max(1, round(f * N))`` are held out. Needs N >= 2.
+
+    A single log (a robot's one long recording) is first cut into contiguous time blocks of at least
+    ``MIN_BLOCK_S`` (``blocks``), which are then split the same way: held-out blocks are whole
+    stretches of time the fit never saw."""
+    if len(trajs) == 1:
+        n = min(MAX_BLOCKS, int(trajs[0].duration // MIN_BLOCK_S))
+        if n < 2:
+            raise DataError(f"{trajs[0].name}: one trajectory of {trajs[0].duration:.1f} s; a single log is cut into blocks "
+                            f"of >= {MIN_BLOCK_S:g} s to hold one out, so it needs >= {2 * MIN_BLOCK_S:g} s. Record longer, "
+                            "add trajectories or pass --heldout DIR")
+        trajs = blocks(trajs[0], n)
     if len(trajs) < 2:
         raise DataError(
             f"need at least 2 trajectories to hold some out (got {len(trajs)}); record more or pass --heldout DIR"

@@ -161,7 +161,7 @@ CASES: list[Case] = [
     cli("diagnose-unknown-candidate", f"sysid diagnose {{root}}/good --candidates latency,magic {CPU}",
         r"--candidates: unknown effect 'magic'; known: coulomb_friction"),
     cli("diagnose-npy-file", f"sysid diagnose {{root}}/npy_as_npz.npz {CPU}", r"not an \.npz archive"),
-    cli("diagnose-one-trajectory", f"sysid diagnose {{root}}/one {CPU}", r"need at least 2 trajectories to hold some out .* --heldout DIR"),
+    cli("diagnose-one-trajectory", f"sysid diagnose {{root}}/one {CPU}", r"one trajectory of .* s; a single log is cut into blocks of >= 10 s .* needs >= 20 s.* --heldout DIR"),
     cli("report-out-is-directory", f"sysid report {{root}}/good --out {{root}}/out_dir {CPU}", r"--out: .*out_dir is a directory"),
     cli("report-diagnosis-not-json", f"sysid report {{root}}/good --out {{root}}/r.html --diagnosis {{root}}/diag_bad.json {CPU}", r"diag_bad\.json: not valid JSON"),
     cli("report-fit-wrong-json", f"sysid report {{root}}/good --out {{root}}/r.html --fit {{root}}/diag_other.json {CPU}", r"diag_other\.json: not a `fit --json` output"),
@@ -177,6 +177,8 @@ CASES: list[Case] = [
     cli("assets-stats-no-catalog", "assets stats {root}/no_data --no-sheet", r"no catalog at .*no_data"),
     # ------------------------------------------------------------------------ top level
     cli("unknown-command", "nope", r"argument COMMAND: invalid choice: 'nope'"),
+    cli("export-gripper-labels-nope", "export --tasks all --episodes 1 --out {root}/ex --gripper-labels intent",
+        r"argument --gripper-labels: invalid choice: 'intent'"),
     cli("export-shader-nope", "export --tasks all --episodes 1 --out {root}/ex --shader nope", r"argument --shader: invalid choice: 'nope'"),
     cli("demo-max-steps-0", "demo --max-steps 0 --tasks REALM-PickApple-v1 --out {root}/demo --no-video", r"argument --max-steps: must be >= 1"),
     cli("demo-episodes-0", "demo --episodes 0 --out {root}/demo --no-video", r"argument --episodes: must be >= 1"),

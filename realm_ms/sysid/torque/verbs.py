@@ -13,6 +13,9 @@ from realm_ms.sysid.torque.space import UNIT, Term, TorqueSet, fit_terms, rmse, 
 from realm_ms.sysid.torque.terms import TERMS, TRACKING_ONLY
 
 MAX_FIT_SAMPLES = 6000  # train samples the least squares sees (evenly thinned); held-out uses all
+#: configured variants screened beside the library candidates: a link's CoM moves the torque in ways
+#: no mass scale can (a regressor product per evaluation, so 28 parameters screen in seconds)
+SCREENED_VARIANTS = ("link_mass:fit_com=true",)
 
 
 def _sets(train, held):
@@ -90,14 +93,15 @@ def diagnose(train, held, model=None, candidates=None, config: DiagnoseConfig | 
     if candidates is None:  # the config's library candidates + the torque-space-only terms + those
         # position space screens only on request (link_mass: cheap here, a regressor fit)
         candidates = [n for n in TERMS if n in cfg.candidates or n not in EFFECTS or not EFFECTS.get(n).screened]
-    names = [n for n in candidates if n not in present and n not in TRACKING_ONLY]
+        candidates += list(SCREENED_VARIANTS)
+    names = [n for n in candidates if _base(n) not in present and _base(n) not in TRACKING_ONLY]
     base_tr, _ = rmse(tr, base_terms)
     base_he, per_he = rmse(he, base_terms)
     floor = _floor(he)
     log(f"torque space: baseline held-out RMSE {base_he:.3e} {UNIT}, noise floor ≈ {floor:.2e} {UNIT}")
     suspects = []
     for n in names:
-        terms = _copy(base_terms) + [Term.make(n)]
+        terms = _copy(base_terms) + parse_terms(n)
         after_tr = fit_terms(tr, terms)
         after_he, _ = rmse(he, terms)
         new = terms[-1]
@@ -120,13 +124,13 @@ def diagnose(train, held, model=None, candidates=None, config: DiagnoseConfig | 
                           "retuned_model_params": s.retuned_model_params} for s in suspects]}
 
 
-def fit(train, held, add: str, model=None, refit: bool = True, log=print, sets=None) -> dict:
+def parse_terms(spec: str) -> list[Term]:
+    """Terms of an ``--add``-style spec, e.g. ``link_mass:link=4,fit_com=true,s4=0.1``: the effect's
+    config keys set its config, the others start its free parameters."""
     from realm_ms.sysid.effect_spec import _value, split_specs
 
-    tr, he = sets or _sets(train, held)
-    base_terms = terms_of(model, log)
-    added = []
-    for name, kv in split_specs(add):
+    out = []
+    for name, kv in split_specs(spec):
         cfg_names = _config_names(name)
         t = Term.make(name, config={k: _value(v, k) for k, v in kv.items() if k in cfg_names})
         kv = {k: v for k, v in kv.items() if k not in cfg_names}
@@ -134,7 +138,20 @@ def fit(train, held, add: str, model=None, refit: bool = True, log=print, sets=N
         if unknown:
             raise ValueError(f"{name}: unknown or fixed parameter(s) {unknown} in torque space; free: {list(t.values)}")
         t.values.update({k: float(v) for k, v in kv.items()})
-        added.append(t)
+        out.append(t)
+    return out
+
+
+def _base(spec: str) -> str:
+    """Effect name of a candidate spec (``link_mass:fit_com=true`` -> ``link_mass``)."""
+    return spec.split(":", 1)[0]
+
+
+def fit(train, held, add: str, model=None, refit: bool = True, log=print, sets=None) -> dict:
+
+    tr, he = sets or _sets(train, held)
+    base_terms = terms_of(model, log)
+    added = parse_terms(add)
     clash = [t.name for t in added if t.name in {b.name for b in base_terms}]
     if clash:
         raise ValueError(f"{', '.join(clash)} already in the model; drop it from --add")
@@ -180,7 +197,9 @@ def auto(train, held, model=None, config=None, log=print) -> dict:
         s = cands[0]
         tried.add(s["effect"])
         # the diagnosis already fitted it jointly with the model's terms: take those values
-        trial = _copy(terms) + [Term.make(s["effect"], s["params"])]
+        new = parse_terms(s["effect"])[0]
+        new.values.update({k: v for k, v in s["params"].items() if k in new.values})
+        trial = _copy(terms) + [new]
         for t in trial[:-1]:
             t.values.update({k.split(".", 1)[1]: v for k, v in s["retuned_model_params"].items()
                              if k.split(".", 1)[0] == t.name})
