@@ -44,6 +44,7 @@ class ImplicitJointTorque(Effect):
         rows = self.active_rows(state.q.device)
         if getattr(self, "_inertia", None) is None or self._inertia.shape[0] != state.q.shape[0]:
             self._inertia = torch.ones_like(state.q)
+            self._mass = torch.eye(state.q.shape[1], dtype=state.q.dtype, device=state.q.device).repeat(state.q.shape[0], 1, 1)
             self._stale = torch.ones(state.q.shape[0], dtype=torch.bool, device=state.q.device)
         need = self._stale.clone()
         if rows is not None:
@@ -52,10 +53,17 @@ class ImplicitJointTorque(Effect):
             need &= mask
         if bool(need.any()):
             idx = torch.nonzero(need)[:, 0]
-            minv = torch.linalg.inv(state.model.mass_matrix(state.q[idx]))
+            mass = state.model.mass_matrix(state.q[idx])
+            minv = torch.linalg.inv(mass)
+            self._mass[idx] = mass.to(self._mass.dtype)
             self._inertia[idx] = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
             self._stale[idx] = False
         return self._inertia
+
+    def mass_matrix(self, state: ControlState, rows: torch.Tensor | None = None) -> torch.Tensor:
+        """The arm's mass matrix M(q) at the configuration of each reset (cached with I_j), on ``rows``."""
+        self._joint_inertia(state)
+        return self._mass if rows is None else self._mass[rows]
 
     def actuator(self, tau, state):
         state.extra["tau_motor"] = tau
