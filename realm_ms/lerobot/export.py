@@ -305,23 +305,24 @@ def gripper_label(action, labels: str):
     so its gripper commands on a grasp are 0.03-0.3 and depend on the object's width to 0.02: a
     learned policy's regression error is larger than that margin, and it ends up holding the pads at
     the object's surface without force. Binary labels carry what the demo means, close or open."""
+    if labels != "binary":
+        return action
     import numpy as np
 
     a = np.array(action, dtype=np.float32).reshape(8)
-    if labels == "binary":
-        a[7] = 1.0 if a[7] > BINARY_GRIPPER_THRESHOLD else 0.0
+    a[7] = 1.0 if a[7] > BINARY_GRIPPER_THRESHOLD else 0.0
     return a
 
 
 def _open(cfg: ExportConfig) -> tuple[_Writer, list[dict]]:
-    other = sorted({r.get("gripper_labels", "command") for r in read_sidecar(cfg.out) if r["kept"]} - {cfg.gripper_labels})
+    recs = read_sidecar(cfg.out)
+    other = sorted({r.get("gripper_labels", "command") for r in recs if r["kept"]} - {cfg.gripper_labels})
     if other:
         raise ExportError(f"{cfg.out} holds episodes with --gripper-labels {other[0]}; resume with the same "
                           f"--gripper-labels or export to a new --out")
     writer = _Writer(cfg)
     # episodes whose sidecar line was written but whose save/commit never completed are forgotten
-    done = [r for r in read_sidecar(writer.root)
-            if not r["kept"] or (r["episode_index"] is not None and r["episode_index"] < writer.num_episodes)]
+    done = [r for r in recs if not r["kept"] or (r["episode_index"] is not None and r["episode_index"] < writer.num_episodes)]
     _rewrite_sidecar(writer.root, done)
     return writer, done
 

@@ -148,7 +148,6 @@ def _base(spec: str) -> str:
 
 
 def fit(train, held, add: str, model=None, refit: bool = True, log=print, sets=None) -> dict:
-
     tr, he = sets or _sets(train, held)
     base_terms = terms_of(model, log)
     added = parse_terms(add)
