@@ -7,6 +7,7 @@ import pytest
 from realm_ms.sysid.engine import Evaluator
 from realm_ms.sysid.fit import compare
 from realm_ms.agents.robot_model import RobotModel
+from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
 from realm_ms.sysid.synth import SynthConfig, synth
 
 
@@ -56,3 +57,12 @@ def test_sleeping_spare_arms_do_not_change_results(ev):
     b = ev.sim.rollout(q0[:2], np.zeros((2, 7)), cmd[:2], [])
     np.testing.assert_allclose(a[:2], b, atol=1e-6)
     np.testing.assert_allclose(big[::3], a, atol=1e-6)
+
+
+def test_the_cpu_replay_driver_takes_the_configured_model_rate():
+    from realm_ms.agents.actuation import ActuationModel
+
+    for rate in ("physics", "control"):
+        sim = ReplaySimulator(SimConfig(model_rate=rate))
+        assert sim._driver(1, ActuationModel()).config.model_rate == rate
+    assert ReplaySimulator(SimConfig())._driver(1, ActuationModel()).config.model_rate == "path"  # the benchmark's

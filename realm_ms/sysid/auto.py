@@ -103,6 +103,8 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
     current = nominal
     floor = judging_floor(noise, cfg.diagnose.replay_floor_rad)
     log(f"auto: nominal held-out RMSE {nominal:.3e} rad, judging floor {floor:.2e} rad ({d.verdict})")
+    if d.saturated_fraction:
+        log(f"auto: {d.saturated_fraction:.1%} of the held-out samples lie in torque-saturated bursts: simulated, not scored")
     steps: list[AutoStep] = []
     tried: set[str] = set()
     fits = 0
@@ -150,6 +152,7 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
         "final": {"heldout_rmse": current, "noise_floor": noise, "verdict": verdict},
         "friction_curve": friction_curve(model),
         "details": {"judging_floor": floor, "found_factor": cfg.diagnose.found_factor,
+                    "saturated_fraction": round(float(d.saturated_fraction), 4),
                     "rejected": [{"effect": s.effect, "heldout_rmse": s.heldout_rmse} for s in steps if not s.kept],
                     "message": _message(verdict, nominal, current, floor, kept)},
         "_model": model,

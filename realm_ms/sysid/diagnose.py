@@ -30,6 +30,7 @@ import numpy as np
 from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
 from realm_ms.sysid.optimize import Group, evaluate_groups, linearized_step
 from realm_ms.sysid.replay import SegmentSet
+from realm_ms.sysid.saturation import PAD_S
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.signatures import Features, compute, noise_floor
 from realm_ms.sysid.timeseries import Trajectory
@@ -88,11 +89,13 @@ class Diagnosis:
     unexplained: bool = False
     verdict: str = "no_missing_effect"  # no_missing_effect | found | partially_explained | unexplained
     judging_floor: float = 0.0  # hypot(noise floor, replay floor): what "at the floor" is measured against
+    saturated_fraction: float = 0.0  # held-out samples in torque-saturated bursts, not scored (``saturation.py``)
 
     def to_json(self) -> dict:
         return {
             "baseline": {"heldout_rmse_rad": float(self.baseline_heldout_rmse), "noise_floor_rad": float(self.noise_floor),
                          "judging_floor_rad": float(self.judging_floor),
+                         "saturated_fraction": round(float(self.saturated_fraction), 4),
                          "train_rmse_rad": float(self.baseline_train_rmse),
                          "per_joint_heldout_rmse_rad": [float(x) for x in self.per_joint_heldout_rmse],
                          "noise_floor_per_joint_rad": [float(x) for x in self.noise_floor_per_joint]},
@@ -122,8 +125,8 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     cfg = config or DiagnoseConfig()
     model = model or RobotModel()
     ev = evaluator or Evaluator.auto(SimConfig.from_model(model))
-    tr_ss = SegmentSet.build(train, model.physics_hz, cfg.segment_s, cfg.burn_in_s)
-    he_ss = SegmentSet.build(heldout, model.physics_hz, cfg.segment_s, cfg.burn_in_s)
+    tr_ss = SegmentSet.build(train, model.physics_hz, cfg.segment_s, cfg.burn_in_s, gains=model.gains)
+    he_ss = SegmentSet.build(heldout, model.physics_hz, cfg.segment_s, cfg.burn_in_s, gains=model.gains)
     base = [fx for fx in model.actuation().stages]
     # with a model that already has effects, each candidate is screened *together with* the model's
     # own parameters (a first effect fitted alone absorbs part of a second one; re-tuning it
@@ -142,6 +145,9 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
 
     # 1. baseline
     log(f"baseline: {tr_ss.n} train / {he_ss.n} held-out segments")
+    if tr_ss.saturated_fraction or he_ss.saturated_fraction:
+        log(f"torque-saturated bursts (a motor at its limit, +-{PAD_S:g} s): {tr_ss.saturated_fraction:.1%} of train, "
+            f"{he_ss.saturated_fraction:.1%} of held-out samples simulated but not scored")
     empty = Group.of(copies())
     (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], fixed, [empty], [empty.u[None]])
     base_tr_rmse, base_he_rmse = float(np.sqrt(b_tr[0][0])), float(np.sqrt(b_he[0][0]))
@@ -212,7 +218,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     verdict, msg, judge = judge_verdict(base_he_rmse, floor, suspects, cfg)
     # the verdict (msg) is printed once, by the caller (CLI: on stdout)
     return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), verdict == "found", suspects, feats,
-                     msg, verdict == "unexplained", verdict, judge)
+                     msg, verdict == "unexplained", verdict, judge, he_ss.saturated_fraction)
 
 
 def judging_floor(noise_floor: float, replay_floor: float) -> float:

@@ -85,8 +85,8 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
         raise ValueError("nothing to fit: give effects with --add (see `realm sysid effects`)")
     fixed = [fx for fx in model.effects if fx not in fitted]
     ev = evaluator or Evaluator.auto(SimConfig.from_model(model))
-    tr_ss = SegmentSet.build(train, model.physics_hz, cfg.segment_s, cfg.burn_in_s)
-    he_ss = SegmentSet.build(heldout, model.physics_hz, cfg.segment_s, cfg.burn_in_s)
+    tr_ss = SegmentSet.build(train, model.physics_hz, cfg.segment_s, cfg.burn_in_s, gains=model.gains)
+    he_ss = SegmentSet.build(heldout, model.physics_hz, cfg.segment_s, cfg.burn_in_s, gains=model.gains)
     base_fixed = sorted(fixed, key=lambda fx: fx.order)
 
     # before: the model as given
@@ -161,7 +161,7 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
 
     model = model or RobotModel()
     ev = evaluator or Evaluator.auto(SimConfig.from_model(model))
-    ss = SegmentSet.build(data, model.physics_hz, segment_s, burn_in_s)
+    ss = SegmentSet.build(data, model.physics_hz, segment_s, burn_in_s, gains=model.gains)
     (r,) = evaluate_groups(ev, [ss], sorted(model.effects, key=lambda f: f.order), [Group.of([])], [np.zeros((1, 0))])
     sim = r[0][2][0]
     res = np.where(ss.mask[..., None], ss.meas - sim, np.nan)
@@ -185,6 +185,7 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
         "per_joint_rmse_rad": [float(x) for x in np.sqrt(np.mean(allres**2, axis=0))],
         "per_joint_max_abs_error_rad": [float(x) for x in np.max(np.abs(allres), axis=0)],
         "noise_floor_rad": floor,
+        "saturated_fraction": ss.saturated_fraction,
         "noise_floor_per_joint_rad": [float(x) for x in floor_j],
         "trajectories": per_traj,
         "error_over_time": over_time,

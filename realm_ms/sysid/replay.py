@@ -73,6 +73,7 @@ class SegmentSet:
     meas: np.ndarray  # (N, L, 7) measured q at the samples
     mask: np.ndarray  # (N, L) bool, scored samples
     sample_idx: np.ndarray  # (N, L) sample index into the trajectory (-1 = padding)
+    saturated_fraction: float = 0.0  # share of the scorable samples left out as torque-saturated (``saturation.py``)
 
     @property
     def n(self) -> int:
@@ -84,7 +85,11 @@ class SegmentSet:
 
     @classmethod
     def build(cls, trajs: list[Trajectory], physics_hz: float = 120.0, length_s: float = 5.0,
-              burn_in_s: float = 1.0, snap_s: float = 0.6) -> "SegmentSet":
+              burn_in_s: float = 1.0, snap_s: float = 0.6, gains: str = "polymetis",
+              score_saturated: bool = False) -> "SegmentSet":
+        """``score_saturated=False``: samples in torque-saturated bursts (``saturation.py``) are
+        simulated but not scored."""
+        from realm_ms.sysid.saturation import unsaturated
         from realm_ms.validate import check_non_negative, check_positive
 
         # a zero, negative or NaN length would never advance the window loop below
@@ -130,6 +135,8 @@ class SegmentSet:
         mask = np.zeros((n, n_samp), dtype=bool)
         sample_idx = -np.ones((n, n_samp), dtype=np.int64)
         vel = [tr.velocity() for tr in trajs]
+        keep = [None if score_saturated else unsaturated(tr, gains) for tr in trajs]
+        scorable = 0
         for i, s in enumerate(segs):
             tr = trajs[s.traj]
             tt = tr.t[s.start:s.stop] - tr.t[s.start]
@@ -140,8 +147,14 @@ class SegmentSet:
             pos[i, m:] = pos[i, m - 1]
             meas[i, :m] = tr.q[s.start:s.stop]
             mask[i, s.score_from - s.start:m] = True
+            scorable += int(mask[i].sum())
+            if keep[s.traj] is not None:
+                mask[i, :m] &= keep[s.traj][s.start:s.stop]
             sample_idx[i, :m] = np.arange(s.start, s.stop)
-        return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx)
+        if not mask.any():  # saturated throughout: score everything rather than nothing
+            return cls.build(trajs, physics_hz, length_s, burn_in_s, snap_s, gains, score_saturated=True)
+        left_out = 1.0 - mask.sum() / max(scorable, 1)
+        return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx, float(left_out))
 
     def sample(self, hist: np.ndarray, seg_idx: np.ndarray | None = None) -> np.ndarray:
         """Simulated q (E, S+1, 7) at physics steps -> at the data samples (E, L, 7)."""

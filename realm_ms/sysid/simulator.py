@@ -93,12 +93,9 @@ class ReplaySimulator:
 
     # ------------------------------------------------------------------ arm pool
     def _driver(self, num_envs: int, actuation: ActuationModel):
-        from realm_ms.agents.control import DroidArmDriver, DroidControlConfig
+        from realm_ms.agents.control import DroidArmDriver
 
-        cfg = DroidControlConfig(
-            gains=self.config.gains, coriolis_feedforward=self.config.coriolis_feedforward, joint_physics=self.config.joint_physics
-        )
-        return DroidArmDriver(self.model, cfg, num_envs, "cpu", actuation)
+        return DroidArmDriver(self.model, self.config.control_config(), num_envs, "cpu", actuation)
 
     def _ensure(self, n: int) -> None:
         from realm_ms.agents.control.maniskill import configure_arm_joints

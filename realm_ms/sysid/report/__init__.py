@@ -63,8 +63,8 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
     from realm_ms.sysid.signatures import noise_floor
 
     seg = DiagnoseConfig()
-    tr_ss = SegmentSet.build(train, model.physics_hz, seg.segment_s, seg.burn_in_s)
-    he_ss = SegmentSet.build(heldout, model.physics_hz, seg.segment_s, seg.burn_in_s)
+    tr_ss = SegmentSet.build(train, model.physics_hz, seg.segment_s, seg.burn_in_s, gains=model.gains)
+    he_ss = SegmentSet.build(heldout, model.physics_hz, seg.segment_s, seg.burn_in_s, gains=model.gains)
     effects = sorted(model.effects, key=lambda f: f.order)
     log("replaying nominal and model")
     groups = [Group.of([]), Group.of(effects)]

@@ -65,7 +65,10 @@ def overview(d: ReportData):
         cls.append(["", "", "", "good" if he.rmse() <= 1.5 * d.noise_floor else "bad"] + [""] * 7)
     intro = (f"<p>Data: <b>{esc(d.data_name)}</b> ({len(d.model_train.segset.trajs)} train / {len(d.model_held.segset.trajs)} "
              f"held-out trajectories). Replay: the benchmark's DROID controller and URDF at {d.model.physics_hz:g} Hz, "
-             f"multiple shooting from the measured state. Noise floor (sensor noise estimate) ≈ {d.noise_floor:.2e} rad.</p>")
+             f"multiple shooting from the measured state. Noise floor (sensor noise estimate) ≈ {d.noise_floor:.2e} rad."
+             + (f" {d.model_held.segset.saturated_fraction:.1%} of the held-out samples lie in torque-saturated bursts "
+                "(a motor at its 87/12 N·m limit, ± 0.2 s): simulated, not scored." if d.model_held.segset.saturated_fraction else "")
+             + "</p>")
     return "Overview: error per joint", intro + table(
         ["model", "train RMSE [rad]", "held-out RMSE [rad]", "held-out / noise"] + [f"{j} held-out" for j in JOINTS], rows, classes=cls)
 
@@ -118,6 +121,10 @@ def overlays(d: ReportData):
     tr = ss.trajs[s.traj]
     n = s.stop - s.start
     t = tr.t[s.start:s.stop]
+    # after the burn-in, unscored samples are the torque-saturated bursts (``saturation.py``)
+    unscored = ~ss.mask[i, :n] & (np.arange(n) >= s.score_from - s.start)
+    edges = np.flatnonzero(np.diff(np.r_[0, unscored.astype(np.int8), 0]))
+    saturated_spans = [(t[a0], t[min(a1, n - 1)]) for a0, a1 in zip(edges[::2], edges[1::2])]
     fig, ax = new(7, 2, 12, 1.5)
     for j in range(7):
         a = ax[j, 0]
@@ -131,10 +138,13 @@ def overlays(d: ReportData):
         b.plot(t, 1e3 * (tr.q[s.start:s.stop, j] - d.model_held.sim[i, :n, j]), color="tab:blue", lw=1)
         b.axhspan(-1e3 * d.noise_floor, 1e3 * d.noise_floor, color="0.85")
         b.axvspan(t[0], tr.t[s.score_from], color="0.93")
+        for a0, a1 in saturated_spans:
+            for c in (a, b):
+                c.axvspan(a0, a1, color="tab:orange", alpha=0.15, lw=0)
         b.set_ylabel("residual [mrad]")
     ax[0, 0].legend(fontsize=7, ncol=4)
     ax[-1, 0].set_xlabel("t [s]")
-    ax[-1, 1].set_xlabel("t [s]  (grey band: ± noise floor; shaded: burn-in, not scored)")
+    ax[-1, 1].set_xlabel("t [s]  (grey band: ± noise floor; grey: burn-in, orange: torque-saturated burst; neither scored)")
     return f"Overlays: command / measured / simulated (worst held-out segment, {esc(tr.name)})", to_img(fig, "overlays")
 
 
