@@ -89,3 +89,61 @@ def test_a_parameter_fitted_onto_its_bound_is_accepted():
     assert abs(fx.values()["vs"] - 0.005) < 1e-9
     with pytest.raises(ValueError, match="outside its bounds"):
         make_effect("stribeck_friction", {"vs": 0.0049})
+
+
+def test_smooth_friction_is_the_gaz_law_and_its_backward_euler_step_solves_its_equation():
+    """With fc = φ₁/2, vs = 2/φ₂, v0 = φ₃ the library's smooth friction is Gaz et al.'s sigmoid;
+    its implicit step lands on the root of a (v - v_free) + f(v) = 0 for stiff and soft joints alike."""
+    import torch
+
+    from realm_ms.agents.effects.smooth_friction import backward_euler_velocity, friction
+    from realm_ms.sysid.reference_friction import GAZ_PHI, gaz_friction
+
+    phi = torch.as_tensor(GAZ_PHI, dtype=torch.float64)
+    for v in (-1.0, -0.2, -0.01, 0.0, 0.03, 0.4, 2.0):
+        ours = friction(torch.full((7,), v, dtype=torch.float64), phi[:, 0] / 2, 2 / phi[:, 1], phi[:, 2])
+        np.testing.assert_allclose(ours.numpy(), gaz_friction(np.full(7, v)), atol=1e-9)
+    # the friction curve `auto` reports is the same law
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.agents.robot_model import RobotModel
+    from realm_ms.sysid.auto import friction_curve
+
+    paper = {f"{k}{j + 1}": float(x) for j, p in enumerate(GAZ_PHI) for k, x in (("fc", p[0] / 2), ("vs", 2 / p[1]), ("v0", p[2]))}
+    curve = friction_curve(RobotModel([make_effect("smooth_friction", paper)]))
+    np.testing.assert_allclose(curve["tau"], [gaz_friction(np.full(7, q)) for q in curve["qd"]], atol=1e-5)
+    g = torch.Generator().manual_seed(0)
+    n = 20000
+    v_free = 2 * torch.randn(n, generator=g, dtype=torch.float64)
+    a = 10 ** (4 * torch.rand(n, generator=g, dtype=torch.float64))  # I/h from 1 to 1e4
+    fc = 3 * torch.rand(n, generator=g, dtype=torch.float64)
+    vs = 10 ** (-2.3 + 2.3 * torch.rand(n, generator=g, dtype=torch.float64))
+    v0 = 0.2 * (torch.rand(n, generator=g, dtype=torch.float64) - 0.5)
+    v = backward_euler_velocity(v_free, a, fc, vs, v0)
+    residual = a * (v - v_free) + friction(v, fc, vs, v0)
+    assert float((residual.abs() / (a * v_free.abs() + fc)).max()) < 1e-6
+    assert bool((v * v_free >= 0).all()) and bool((v.abs() <= v_free.abs() + 1e-12).all())  # friction never reverses
+
+
+def test_the_true_smooth_friction_replays_a_gaz_plant_in_position_space(tmp_path):
+    """MuJoCo-native plant with Gaz's friction (applied each 4 kHz substep, not realm-ms code),
+    replayed by the benchmark's 120 Hz driver: the smooth friction at the paper's values comes
+    within 2x the judging floor; the exact-stiction Coulomb law at the same levels does not."""
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.agents.robot_model import RobotModel
+    from realm_ms.sysid.data_io import load_split
+    from realm_ms.sysid.diagnose import judging_floor
+    from realm_ms.sysid.engine import Evaluator
+    from realm_ms.sysid.fit import compare
+    from realm_ms.sysid.reference_friction import GAZ_PHI
+    from realm_ms.sysid.reference_native import synth_native
+
+    synth_native("gaz", tmp_path, seed=1, n_train=1, n_heldout=1, duration_s=8.0, with_cmd=True)
+    _, held = load_split(tmp_path)
+    ev = Evaluator(workers=1, device="cpu")
+    smooth = {f"{k}{j + 1}": v for j, p in enumerate(GAZ_PHI) for k, v in (("fc", p[0] / 2), ("vs", 2 / p[1]), ("v0", p[2]))}
+    coulomb = {f"fc{j + 1}": p[0] / 2 for j, p in enumerate(GAZ_PHI)}
+    r_smooth = compare(held, RobotModel([make_effect("smooth_friction", smooth)]), evaluator=ev)
+    r_coulomb = compare(held, RobotModel([make_effect("coulomb_friction", coulomb)]), evaluator=ev)
+    floor = judging_floor(r_smooth["noise_floor_rad"], 2.5e-4)
+    assert r_smooth["rmse_rad"] <= 2 * floor, (r_smooth["rmse_rad"], floor)
+    assert r_coulomb["rmse_rad"] > 2 * r_smooth["rmse_rad"], (r_coulomb["rmse_rad"], r_smooth["rmse_rad"])

@@ -147,6 +147,12 @@ def _stribeck(f, fx, v, size):
             f"corr {f.corr_sign[j]:+.2f} with sign(q̇)) → Stribeck friction / stiction, {size}")
 
 
+def _smooth(f, fx, v, size):
+    j = _top(f.corr_vel, f)
+    return (f"residual follows velocity at low speed and levels off at high speed (corr {f.corr_vel[j]:+.2f} with q̇ on "
+            f"{_j(j)}, slow/fast {f.slow_fast[j]:.1f}) → smooth friction without stiction, {size}")
+
+
 def _armature(f, fx, v, size):
     j = _top(f.corr_acc, f)
     return (f"residual follows acceleration (corr {f.corr_acc[j]:+.2f} with q̈ on {_j(j)}) and vanishes in holds "
@@ -200,6 +206,7 @@ SENTENCES: dict[str, Callable] = {
     "coulomb_friction": _coulomb,
     "viscous_damping": _viscous,
     "stribeck_friction": _stribeck,
+    "smooth_friction": _smooth,
     "armature": _armature,
     "payload": _payload,
     "gravity_comp_error": _gravity,

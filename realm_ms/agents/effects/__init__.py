@@ -26,6 +26,7 @@ from realm_ms.agents.effects.gravity_comp_error import GravityCompError
 from realm_ms.agents.effects.latency import Latency
 from realm_ms.agents.effects.link_mass import LinkMass
 from realm_ms.agents.effects.payload import Payload
+from realm_ms.agents.effects.smooth_friction import SmoothFriction
 from realm_ms.agents.effects.stribeck_friction import StribeckFriction
 from realm_ms.agents.effects.torque_limit import TorqueLimit
 from realm_ms.agents.effects.viscous_damping import ViscousDamping
@@ -33,7 +34,7 @@ from realm_ms.registry import Registry
 
 EFFECTS: Registry[type[Effect]] = Registry("effect")
 
-for _cls in (CoulombFriction, ViscousDamping, StribeckFriction, Armature, Payload, GravityCompError,
+for _cls in (CoulombFriction, ViscousDamping, StribeckFriction, SmoothFriction, Armature, Payload, GravityCompError,
              Latency, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass):
     EFFECTS.register(_cls.name, _cls)
 
@@ -42,6 +43,7 @@ CONFOUNDS: list[tuple[str, str]] = [
     ("latency", "viscous_damping"),
     ("payload", "gravity_comp_error"),
     ("coulomb_friction", "stribeck_friction"),
+    ("coulomb_friction", "smooth_friction"),
     ("backlash", "encoder_bias"),
     ("latency", "torque_limit"),
     ("armature", "gain_mismatch"),

@@ -22,6 +22,10 @@ class ImplicitJointTorque(Effect):
     along a segment only softens the stick phase, it never destabilises it: a 0.8 safety factor
     keeps the deadbeat stop from overshooting).
 
+    Effects with ``coupled = True`` (viscous damping, smooth friction: steep viscous slopes) take
+    a backward-Euler step with the whole mass matrix instead (``coupled_torque``) whenever the
+    tick's motor torque is known: the joints are coupled through M, and the per-joint step misses it.
+
     With the exact integrator (the default) the driver evaluates these effects at every 1 kHz tick
     of the law inside the physics step (``within_step``), from the tick's velocity and law torque:
     a friction torque held over a whole 8.3 ms step, or lagged by one, cannot follow the wrist's
@@ -83,12 +87,27 @@ class ImplicitJointTorque(Effect):
         net = tau - model_bias(state, rows)
         return qd + state.dt * net / inertia, inertia
 
+    #: the effect has a backward-Euler step coupled through the whole mass matrix (``coupled_torque``)
+    coupled = False
+
     def plant_torque(self, state):
         rows = self.active_rows(state.q.device)
         if rows is not None and rows.numel() == 0:
             return None
+        tau = state.extra.get("tau_motor")
+        if self.coupled and tau is not None:
+            qd = state.qd if rows is None else state.qd[rows]
+            mass = self.mass_matrix(state, rows).to(qd.dtype)
+            net = ((tau if rows is None else tau[rows]) - model_bias(state, rows)).to(qd.dtype)
+            return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass, net))
+        # no motor torque this tick, or a per-joint effect: the per-joint form
         v_free, inertia = self.free_velocity(state, rows)
         return scatter_rows(state.q, rows, self.friction_torque(v_free, inertia, state, rows))
+
+    def coupled_torque(self, state, rows, qd, mass, net) -> torch.Tensor:
+        """The effect's torque on ``rows`` from a step coupled through M (at the segment's reset):
+        q̇, M and the net torque τ_motor − b(q, q̇) on those rows."""
+        raise NotImplementedError
 
     def friction_torque(self, v_free, inertia, state, rows) -> torch.Tensor:
         raise NotImplementedError

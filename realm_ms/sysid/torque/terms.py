@@ -80,6 +80,12 @@ def stribeck(values, s, config):
     return fs * (r + (1 - r) * torch.exp(-((s.qd / vs) ** 2))) * _sign(s.qd)
 
 
+def smooth(values, s, config):
+    from realm_ms.agents.effects.smooth_friction import friction
+
+    return friction(s.qd, _vec(values, "fc"), _vec(values, "vs", 0.1), _vec(values, "v0"))
+
+
 def armature(values, s, config):
     return _vec(values, "ia") * s.qdd
 
@@ -127,8 +133,8 @@ def link_mass(values, s, config):
 
 #: effect name -> torque-space term
 TERMS: dict[str, Callable] = {
-    "coulomb_friction": coulomb, "viscous_damping": viscous, "stribeck_friction": stribeck, "armature": armature,
-    "payload": payload, "gravity_comp_error": gravity_error, "link_mass": link_mass,
+    "coulomb_friction": coulomb, "viscous_damping": viscous, "stribeck_friction": stribeck, "smooth_friction": smooth,
+    "armature": armature, "payload": payload, "gravity_comp_error": gravity_error, "link_mass": link_mass,
 }
 
 #: torque-space-only parameter specs (effects not in the simulation library; none at present)
