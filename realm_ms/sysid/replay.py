@@ -136,7 +136,7 @@ class SegmentSet:
         sample_idx = -np.ones((n, n_samp), dtype=np.int64)
         vel = [tr.velocity() for tr in trajs]
         keep = [None if score_saturated else unsaturated(tr, gains) for tr in trajs]
-        scorable = 0
+        unsat = np.ones((n, n_samp), dtype=bool)
         for i, s in enumerate(segs):
             tr = trajs[s.traj]
             tt = tr.t[s.start:s.stop] - tr.t[s.start]
@@ -147,13 +147,13 @@ class SegmentSet:
             pos[i, m:] = pos[i, m - 1]
             meas[i, :m] = tr.q[s.start:s.stop]
             mask[i, s.score_from - s.start:m] = True
-            scorable += int(mask[i].sum())
             if keep[s.traj] is not None:
-                mask[i, :m] &= keep[s.traj][s.start:s.stop]
+                unsat[i, :m] = keep[s.traj][s.start:s.stop]
             sample_idx[i, :m] = np.arange(s.start, s.stop)
-        if not mask.any():  # saturated throughout: score everything rather than nothing
-            return cls.build(trajs, physics_hz, length_s, burn_in_s, snap_s, gains, score_saturated=True)
-        left_out = 1.0 - mask.sum() / max(scorable, 1)
+        left_out = 0.0
+        if (mask & unsat).any():  # a log saturated throughout is scored whole rather than not at all
+            left_out = 1.0 - (mask & unsat).sum() / mask.sum()
+            mask &= unsat
         return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx, float(left_out))
 
     def sample(self, hist: np.ndarray, seg_idx: np.ndarray | None = None) -> np.ndarray:

@@ -9,6 +9,7 @@ import numpy as np
 from realm_ms.agents.effects.parameter import format_value
 from realm_ms.sysid.report.figures import new, to_img
 from realm_ms.sysid.report.html import esc, table
+from realm_ms.sysid.saturation import PAD_S
 
 JOINTS = [f"J{i}" for i in range(1, 8)]
 
@@ -67,7 +68,7 @@ def overview(d: ReportData):
              f"held-out trajectories). Replay: the benchmark's DROID controller and URDF at {d.model.physics_hz:g} Hz, "
              f"multiple shooting from the measured state. Noise floor (sensor noise estimate) ≈ {d.noise_floor:.2e} rad."
              + (f" {d.model_held.segset.saturated_fraction:.1%} of the held-out samples lie in torque-saturated bursts "
-                "(a motor at its 87/12 N·m limit, ± 0.2 s): simulated, not scored." if d.model_held.segset.saturated_fraction else "")
+                f"(a motor at its 87/12 N·m limit, ± {PAD_S:g} s): simulated, not scored." if d.model_held.segset.saturated_fraction else "")
              + "</p>")
     return "Overview: error per joint", intro + table(
         ["model", "train RMSE [rad]", "held-out RMSE [rad]", "held-out / noise"] + [f"{j} held-out" for j in JOINTS], rows, classes=cls)
