@@ -78,6 +78,13 @@ class Recipe:
     finetune_steps: int = 400
     device: str = "cpu"
     threads: int | None = None
+    # data-loader processes for lerobot-train; None: 0 on CPU (the cores train), most cores on a GPU
+    loader_workers: int | None = None
+
+    def dataloader_workers(self) -> int:
+        if self.loader_workers is not None:
+            return self.loader_workers
+        return 0 if self.device == "cpu" else max(0, (os.cpu_count() or 1) - 2)
 
     @classmethod
     def quick(cls, **kw) -> Recipe:
@@ -196,7 +203,7 @@ def train(r: Recipe, dataset: Path, run: Path, steps: int, init: Path | None = N
             f"--dataset.repo_id=realm/{dataset.name}", f"--dataset.root={dataset}", "--dataset.video_backend=pyav",
             f"--policy.device={r.device}", "--policy.push_to_hub=false", f"--policy.optimizer_lr={r.lr}",
             f"--policy.optimizer_lr_backbone={r.lr}", f"--steps={steps}", f"--batch_size={r.batch_size}",
-            "--num_workers=0", f"--save_freq={save_freq or r.save_freq}", f"--log_freq={r.log_freq}", f"--output_dir={run}",
+            f"--num_workers={r.dataloader_workers()}", f"--save_freq={save_freq or r.save_freq}", f"--log_freq={r.log_freq}", f"--output_dir={run}",
             "--wandb.enable=false"]
     cmd = [sys.executable, "-m", "lerobot.scripts.lerobot_train"] + cmd
     with open(log, "a") as f, tqdm(total=steps, initial=done, desc=f"lerobot-train {run.name}", unit="step") as bar:
@@ -382,10 +389,14 @@ def parse(argv=None) -> Recipe:
     ap.add_argument("--threads", type=int, default=None, help="torch CPU threads for training (default: all cores)")
     ap.add_argument("--steps", type=int, default=None, help="training steps (default 2000; --quick 2)")
     ap.add_argument("--workers", type=int, default=None, help="parallel env processes for realm eval (default 2)")
+    ap.add_argument("--batch-size", type=int, default=None, help="training batch size (default 16)")
+    ap.add_argument("--loader-workers", type=int, default=None,
+                    help="data-loader processes for training (default: 0 on cpu, all cores but 2 on cuda)")
     ap.add_argument("--quick", action="store_true", help="CI: every stage with a handful of steps (no success expected)")
     a = ap.parse_args(argv)
     kw = {k: v for k, v in (("out", a.out), ("device", a.device), ("threads", a.threads), ("steps", a.steps),
-                            ("workers", a.workers)) if v is not None}
+                            ("workers", a.workers), ("batch_size", a.batch_size),
+                            ("loader_workers", a.loader_workers)) if v is not None}
     return Recipe.quick(**kw) if a.quick else Recipe(**kw)
 
 

@@ -77,3 +77,13 @@ def test_fine_tuning_skips_what_a_language_blind_policy_cannot_observe():
     assert not any(ex.observable(p, language=False) for p in ("S-LANG", "SB-NOUN", "S-LANG+SB-VRB"))
     assert all(ex.observable(p, language=False) for p in ("V-AUG", "VB-POSE", "VSB-NOBJ", "B-HOBJ", "S-LANG+V-AUG"))
     assert ex.observable("SB-NOUN", language=True)
+
+
+def test_recipe_loads_data_in_the_trainer_on_cpu_and_in_loader_processes_on_a_gpu(monkeypatch):
+    ex = _example()
+    monkeypatch.setattr(ex.os, "cpu_count", lambda: 16)
+    assert ex.parse([]).dataloader_workers() == 0
+    gpu = ex.parse(["--device", "cuda", "--batch-size", "64"])
+    assert (gpu.dataloader_workers(), gpu.batch_size) == (14, 64)
+    assert ex.parse(["--device", "cuda", "--loader-workers", "3"]).dataloader_workers() == 3
+    assert ex.parse(["--quick", "--loader-workers", "1"]).dataloader_workers() == 1
