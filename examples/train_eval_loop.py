@@ -390,13 +390,25 @@ def parse(argv=None) -> Recipe:
     ap.add_argument("--steps", type=int, default=None, help="training steps (default 2000; --quick 2)")
     ap.add_argument("--workers", type=int, default=None, help="parallel env processes for realm eval (default 2)")
     ap.add_argument("--batch-size", type=int, default=None, help="training batch size (default 16)")
+    ap.add_argument("--camera-size", default=None, metavar="WxH",
+                    help="camera size of the demos, training and eval (default 64x48; 128x96 localises better, ~4x the compute)")
     ap.add_argument("--loader-workers", type=int, default=None,
                     help="data-loader processes for training (default: 0 on cpu, all cores but 2 on cuda)")
     ap.add_argument("--quick", action="store_true", help="CI: every stage with a handful of steps (no success expected)")
     a = ap.parse_args(argv)
+    if a.camera_size:
+        try:
+            a.width, a.height = (int(v) for v in a.camera_size.lower().split("x"))
+            if min(a.width, a.height) <= 0:
+                raise ValueError
+        except ValueError:
+            ap.error(f"--camera-size {a.camera_size!r}: expected WIDTHxHEIGHT, e.g. 128x96")
+    else:
+        a.width = a.height = None
     kw = {k: v for k, v in (("out", a.out), ("device", a.device), ("threads", a.threads), ("steps", a.steps),
                             ("workers", a.workers), ("batch_size", a.batch_size),
-                            ("loader_workers", a.loader_workers)) if v is not None}
+                            ("loader_workers", a.loader_workers), ("width", a.width),
+                            ("height", a.height)) if v is not None}
     return Recipe.quick(**kw) if a.quick else Recipe(**kw)
 
 

@@ -87,3 +87,15 @@ def test_recipe_loads_data_in_the_trainer_on_cpu_and_in_loader_processes_on_a_gp
     assert (gpu.dataloader_workers(), gpu.batch_size) == (14, 64)
     assert ex.parse(["--device", "cuda", "--loader-workers", "3"]).dataloader_workers() == 3
     assert ex.parse(["--quick", "--loader-workers", "1"]).dataloader_workers() == 1
+
+
+def test_recipe_camera_size_reaches_every_stage_and_bad_sizes_are_refused(capsys):
+    import pytest
+
+    ex = _example()
+    r = ex.parse(["--camera-size", "128x96"])
+    assert (r.width, r.height) == (128, 96) and (ex.parse([]).width, ex.parse([]).height) == (64, 48)
+    for bad in ("128", "0x96", "wide"):
+        with pytest.raises(SystemExit):
+            ex.parse(["--camera-size", bad])
+        assert "expected WIDTHxHEIGHT" in capsys.readouterr().err
