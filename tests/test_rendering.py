@@ -5,9 +5,8 @@ Runs on lavapipe (CPU) in CI and on a GPU: frames are checked by statistics, not
 Each shader renders in a child process: on our 2-core machine lavapipe's ray-tracing path segfaults
 intermittently in the first render (rt-fast alone: 2 crashes in 4 runs of the same script, on this
 tree and on earlier ones, and after ~600 tests in one pytest process; once 3 crashes in a row in a
-full `make test`). A child that dies of SIGSEGV
-is run again, at most ``ATTEMPTS`` times in all; any other failure, or a crash on every attempt,
-fails the test with the child's output.
+full `make test`). A child that dies of SIGSEGV is run again, at most ``ATTEMPTS`` times in all; any
+other failure, or a crash on every attempt, fails the test with the child's output.
 """
 
 import json
