@@ -396,15 +396,13 @@ def parse(argv=None) -> Recipe:
                     help="data-loader processes for training (default: 0 on cpu, all cores but 2 on cuda)")
     ap.add_argument("--quick", action="store_true", help="CI: every stage with a handful of steps (no success expected)")
     a = ap.parse_args(argv)
-    if a.camera_size:
-        try:
-            a.width, a.height = (int(v) for v in a.camera_size.lower().split("x"))
-            if min(a.width, a.height) <= 0:
-                raise ValueError
-        except ValueError:
-            ap.error(f"--camera-size {a.camera_size!r}: expected WIDTHxHEIGHT, e.g. 128x96")
-    else:
-        a.width = a.height = None
+    from realm_ms.errors import UserError
+    from realm_ms.eval.cli import parse_camera_size  # the check `realm eval --camera-size` applies
+
+    try:
+        a.width, a.height = parse_camera_size(a.camera_size) or (None, None)
+    except UserError as e:
+        ap.error(str(e))
     kw = {k: v for k, v in (("out", a.out), ("device", a.device), ("threads", a.threads), ("steps", a.steps),
                             ("workers", a.workers), ("batch_size", a.batch_size),
                             ("loader_workers", a.loader_workers), ("width", a.width),

@@ -62,7 +62,8 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _parse_size(text: str | None) -> tuple[int, int] | None:
+def parse_camera_size(text: str | None) -> tuple[int, int] | None:
+    """``--camera-size WxH`` -> (width, height); None when not given. Bad text raises ``UserError``."""
     from realm_ms.errors import UserError
 
     if not text:
@@ -133,7 +134,7 @@ def run(args) -> int:
     proto, tasks, perts = resolve(args)
     return evaluate(
         args.policy, tasks, perts, proto, args.out, workers=args.workers, backend=args.backend, ray_address=args.ray_address,
-        camera_size=_parse_size(args.camera_size), videos=args.videos, quality=not args.no_quality, progress=not args.no_progress,
+        camera_size=parse_camera_size(args.camera_size), videos=args.videos, quality=not args.no_quality, progress=not args.no_progress,
         policy_options=dict(openpi_format=args.openpi_format, openpi_wait_s=args.openpi_wait, device=args.device, action_space=args.action_space),
     )
 
