@@ -38,3 +38,17 @@ def test_format_value():
     assert format_value(0.0123, "s") == "12.3 ms"
     assert format_value(0.0021, "rad") == "2.1 mrad"
     assert format_value(0.31, "N·m") == "0.31 N·m"
+
+
+def test_a_fit_pressed_against_a_bound_is_flagged_but_an_effect_left_off_is_not():
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.agents.robot_model import RobotModel
+
+    spec = ParamSpec("s", "1", 0.1, -0.9, 2.0, 0.0)
+    assert spec.at_bound(-0.9) == "lower" and spec.at_bound(2.0) == "upper"
+    assert spec.at_bound(-0.89) is None and spec.at_bound(0.5) is None and spec.at_bound(0.0) is None
+    fc = ParamSpec("fc", "N·m", 0.3, 0.0, 3.0, 0.0)
+    assert fc.at_bound(0.0) is None  # off-value on the bound: the effect is off on that joint, not stretched
+    m = RobotModel([make_effect("link_mass", {"s2": -0.9, "s4": 0.3}, {"fit_com": True}),
+                    make_effect("coulomb_friction", {"fc": 0.0, "fc7": 3.0})])
+    assert m.params_at_bounds() == {"link_mass.s2": "lower", "coulomb_friction.fc7": "upper"}

@@ -100,6 +100,17 @@ class RobotModel:
     def params(self) -> dict[str, float]:
         return {f"{e.name}.{k}": v for e in self.effects for k, v in e.values().items()}
 
+    def params_at_bounds(self) -> dict[str, str]:
+        """Fitted parameters pressed against a bound, ``{"link_mass.s2": "lower"}``."""
+        out = {}
+        for e in self.effects:
+            values = e.values()
+            for p in e.free_params:
+                side = p.spec.at_bound(values[p.local_key])
+                if side:
+                    out[p.key] = side
+        return out
+
     def to_dict(self) -> dict[str, Any]:
         from dataclasses import asdict
 

@@ -154,21 +154,34 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
         "details": {"judging_floor": floor, "found_factor": cfg.diagnose.found_factor,
                     "saturated_fraction": round(float(d.saturated_fraction), 4),
                     "rejected": [{"effect": s.effect, "heldout_rmse": s.heldout_rmse} for s in steps if not s.kept],
-                    "message": _message(verdict, nominal, current, floor, kept)},
+                    "at_bounds": model.params_at_bounds(),
+                    "message": _message(verdict, nominal, current, floor, kept, model.params_at_bounds())},
         "_model": model,
     }
     log(out["details"]["message"])
     return out
 
 
-def _message(verdict: str, nominal: float, final: float, floor: float, kept: list[AutoStep]) -> str:
+def bounds_note(at_bounds: dict[str, str]) -> str:
+    """A clause naming fitted parameters pressed against a bound, else ''."""
+    if not at_bounds:
+        return ""
+    names = ", ".join(f"{k} ({side})" for k, side in list(at_bounds.items())[:8])
+    more = f" and {len(at_bounds) - 8} more" if len(at_bounds) > 8 else ""
+    return (f"; at their bounds: {names}{more}: the effect is stretched to explain something else, "
+            "so read these values with care")
+
+
+def _message(verdict: str, nominal: float, final: float, floor: float, kept: list[AutoStep],
+             at_bounds: dict[str, str] | None = None) -> str:
     chain = " -> ".join([f"nominal {nominal:.2e}"] + [f"+{s.effect} {s.heldout_rmse:.2e}" for s in kept]) + " rad"
     if verdict == "at_floor":
-        return f"at the floor ({final:.2e} <= 1.5x {floor:.2e} rad): {chain}"
+        return f"at the floor ({final:.2e} <= 1.5x {floor:.2e} rad): {chain}" + bounds_note(at_bounds or {})
     if verdict == "partially_explained":
         share = 1 - max(final**2 - floor**2, 0) / max(nominal**2 - floor**2, 1e-30)
         return (f"partially explained ({100 * share:.0f}% of the model error): {chain}; residual {final:.2e} rad "
-                f"left ({final / floor:.1f}x the floor): an effect outside the library, or a plant/controller mismatch")
+                f"left ({final / floor:.1f}x the floor): an effect outside the library, or a plant/controller mismatch"
+                + bounds_note(at_bounds or {}))
     return (f"unexplained: no effect in the library lowers the held-out RMSE {nominal:.2e} rad "
             f"({nominal / floor:.1f}x the floor {floor:.2e} rad)")
 

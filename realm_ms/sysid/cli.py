@@ -186,6 +186,7 @@ def _compare(args) -> int:
               f"noise floor ≈ {c['noise_floor_nm']:.2e} N·m")
         print("joint       " + " ".join(f"{n:>9}" for n in names))
         print("RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in c["per_joint_rmse_nm"]))
+        _print_bands(c["residual_bands"])
         _write_json(args.json, c)
         return 0
     print(f"replay of {len(c['trajectories'])} trajectories: RMSE {c['rmse_rad']:.3e} rad, noise floor ≈ {c['noise_floor_rad']:.2e} rad")
@@ -253,8 +254,20 @@ def _fit(args) -> int:
         m = f[when]
         print(f"{when:<6} held-out [{unit}] " + " ".join(format(v, fmt) for v in m[f"per_joint_heldout_rmse_{key}"])
               + f"  {format(m[f'heldout_rmse_{key}'], fmt)}   (train {format(m[f'train_rmse_{key}'], train_fmt)})")
+    if torque:
+        _print_bands(f["residual_bands"])
+    if f.get("at_bounds"):
+        print("at a bound (the effect is stretched to explain something else): "
+              + ", ".join(f"{k} ({side})" for k, side in f["at_bounds"].items()))
     _write_json(args.json, f)
     return 0
+
+
+def _print_bands(b: dict) -> None:
+    """Torque residual per frequency band (``torque/spectrum.py``)."""
+    print("by band     " + " ".join(f"{'J' + str(i):>9}" for i in range(1, 8)) + "    share")
+    for name, row, share in zip(b["bands"], b["rms_per_joint"], b["share"]):
+        print(f"{name:<11} " + " ".join(f"{v:9.3f}" for v in row) + f"   {100 * share:5.1f}%")
 
 
 def _auto(args) -> int:

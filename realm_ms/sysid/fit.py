@@ -57,7 +57,8 @@ class FitResult:
     def to_json(self) -> dict:
         return {"effects": self.effects, "params": self.params, "before": self.before, "after": self.after,
                 "history": self.history, "units": self.units, "bounds": self.bounds,
-                "uncertainty": self.uncertainty, "linearized_start": self.gn_history}
+                "uncertainty": self.uncertainty, "linearized_start": self.gn_history,
+                "at_bounds": self.model.params_at_bounds()}
 
 
 def _metrics(tr_res, he_res) -> dict:

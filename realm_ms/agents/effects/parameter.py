@@ -49,6 +49,18 @@ class ParamSpec:
         if self.scale == "log" and self.lo <= 0:
             raise ValueError(f"log-scaled {self.name} needs lo > 0")
 
+    def at_bound(self, value: float, rel_tol: float = 1e-3) -> str | None:
+        """"lower"/"upper" when ``value`` sits on a bound that is not its off-value (a fit pressed
+        against a bound: the effect is asked to explain something it cannot), else None."""
+        tol = rel_tol * (self.hi - self.lo)
+        if abs(value - self.off) <= tol:
+            return None
+        if value <= self.lo + tol:
+            return "lower"
+        if value >= self.hi - tol:
+            return "upper"
+        return None
+
     def expand(self, effect: str) -> list["Param"]:
         if not self.per_joint:
             return [Param(effect, self, None)]

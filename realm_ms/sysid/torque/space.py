@@ -34,16 +34,19 @@ class TorqueSet:
     tau: np.ndarray  # (N, 7)
     nominal: np.ndarray  # (N, 7) ID of the URDF at the smoothed state
     noise: np.ndarray  # (7,) noise-floor estimate per joint
+    lengths: list[int] = field(default_factory=list)  # scored samples per trajectory (unthinned sets)
+    dt: float = 0.0  # median sample interval, s
 
     @classmethod
     def build(cls, trajs: list[Trajectory], arm, smoothing: SmoothingConfig = SmoothingConfig(),
               max_samples: int | None = None) -> "TorqueSet":
-        parts, noise_var, weights = [], [], []
+        parts, noise_var, weights, dts = [], [], [], []
         for tr in trajs:
             if tr.tau is None:
                 raise ValueError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
             sm = smooth(tr.t, tr.q, tr.tau, tr.qd, smoothing)
             dt = float(np.median(np.diff(tr.t)))
+            dts.append(dt)
             cut = max(1, int(round(smoothing.window_s / dt)))  # SG extrapolates near the ends
             sl = slice(cut, len(sm.tau) - cut)
             if sl.stop - sl.start < 10:
@@ -55,15 +58,17 @@ class TorqueSet:
             noise_var.append(noise_floor(sm, msq) ** 2)
             weights.append(sl.stop - sl.start)
         q, v, a, tau = (np.concatenate([p[i] for p in parts]) for i in range(4))
+        lengths = list(weights)
         if max_samples and len(q) > max_samples:  # evenly thinned: the fit needs coverage, not every ms
             idx = np.linspace(0, len(q) - 1, max_samples).astype(int)
             q, v, a, tau = q[idx], v[idx], a[idx], tau[idx]
+            lengths = []  # thinned: no longer contiguous time series
         t64 = lambda x: torch.as_tensor(x, dtype=torch.float64)  # noqa: E731
         s = Samples(t64(q), t64(v), t64(a), arm)
         with torch.inference_mode():
             nominal = arm.rnea(s.q, s.qd, s.qdd).numpy()
         noise = np.sqrt(np.average(np.array(noise_var), axis=0, weights=weights))
-        return cls(s, tau, nominal, noise)
+        return cls(s, tau, nominal, noise, lengths, float(np.median(dts)))
 
 
 def torque_arm():
@@ -145,6 +150,16 @@ def predict(terms: list[Term], s: Samples, n: int) -> np.ndarray:
 def rmse(ts: TorqueSet, terms: list[Term]) -> tuple[float, np.ndarray]:
     r = ts.tau - ts.nominal - predict(terms, ts.samples, len(ts.tau))
     return float(np.sqrt(np.mean(r**2))), np.sqrt(np.mean(r**2, axis=0))
+
+
+def residual_bands(ts: TorqueSet, terms: list[Term]) -> dict:
+    """The residual left by ``terms`` split into frequency bands (``spectrum.py``)."""
+    from realm_ms.sysid.torque.spectrum import band_rms, summary
+
+    if not ts.lengths:
+        raise ValueError("residual bands need an unthinned sample set (contiguous time series)")
+    r = ts.tau - ts.nominal - predict(terms, ts.samples, len(ts.tau))
+    return summary(band_rms(r, ts.lengths, ts.dt))
 
 
 def fit_terms(train: TorqueSet, terms: list[Term], starts: tuple[str, ...] = ("current", "nominal")) -> float:

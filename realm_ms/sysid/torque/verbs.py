@@ -9,7 +9,8 @@ from realm_ms.agents.effects import EFFECTS
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judge_verdict
 from realm_ms.sysid.timeseries import Trajectory
-from realm_ms.sysid.torque.space import UNIT, Term, TorqueSet, fit_terms, rmse, torque_arm
+from realm_ms.sysid.torque.space import UNIT, Term, TorqueSet, fit_terms, residual_bands, rmse, torque_arm
+from realm_ms.sysid.torque.spectrum import high_frequency_note
 from realm_ms.sysid.torque.terms import TERMS, TRACKING_ONLY
 
 MAX_FIT_SAMPLES = 6000  # train samples the least squares sees (evenly thinned); held-out uses all
@@ -81,7 +82,7 @@ def compare(trajs: list[Trajectory], model: RobotModel | None = None) -> dict:
     total, per = rmse(ts, terms)
     return {"unit": UNIT, "rmse_nm": total, "per_joint_rmse_nm": [float(x) for x in per],
             "noise_floor_nm": _floor(ts), "noise_floor_per_joint_nm": [float(x) for x in ts.noise],
-            "samples": len(ts.tau)}
+            "samples": len(ts.tau), "residual_bands": residual_bands(ts, terms)}
 
 
 def diagnose(train, held, model=None, candidates=None, config: DiagnoseConfig | None = None, log=print,
@@ -170,8 +171,9 @@ def fit(train, held, add: str, model=None, refit: bool = True, log=print, sets=N
                       "per_joint_heldout_rmse_nm": [float(x) for x in before_j]},
            "after": {"train_rmse_nm": after_tr, "heldout_rmse_nm": after_he,
                      "per_joint_heldout_rmse_nm": [float(x) for x in after_j]},
-           "noise_floor_nm": _floor(he), "_terms": terms}
+           "noise_floor_nm": _floor(he), "residual_bands": residual_bands(he, terms), "_terms": terms}
     out["_model"] = model_of(terms, model)
+    out["at_bounds"] = out["_model"].params_at_bounds()
     return out
 
 
@@ -215,10 +217,14 @@ def auto(train, held, model=None, config=None, log=print) -> dict:
     verdict = "at_floor" if current <= dcfg.found_factor * floor else ("partially_explained" if steps else "unexplained")
     final_model = model_of(terms, model)
     kept = [AutoStep(s["effect"], s["params"], s["heldout_rmse"], True, "") for s in steps]
-    msg = _message(verdict, nominal, current, floor, kept).replace(" rad", f" {UNIT}")
+    bands = residual_bands(sets[1], terms)
+    at_bounds = final_model.params_at_bounds()
+    msg = _message(verdict, nominal, current, floor, kept, at_bounds).replace(" rad", f" {UNIT}")
+    if verdict != "at_floor" and high_frequency_note(bands):
+        msg += "; " + high_frequency_note(bands)
     return {"unit": UNIT, "nominal_heldout_rmse": nominal, "steps": steps,
             "final": {"heldout_rmse": current, "noise_floor": noise, "verdict": verdict},
             "friction_curve": friction_curve(final_model),
             "details": {"judging_floor": floor, "found_factor": dcfg.found_factor, "rejected": rejected,
-                        "message": msg, "space": "torque"},
+                        "message": msg, "space": "torque", "residual_bands": bands, "at_bounds": at_bounds},
             "_model": final_model}
