@@ -99,7 +99,8 @@ def test_cli_torque_space_and_tracking_effects_need_q_cmd(friction, tmp_path, ca
     assert code == 2 and "needs `q_cmd`" in err and "Traceback" not in err
     code = main(["sysid", "report", str(friction), "--out", str(tmp_path / "r.html")])
     capsys.readouterr()
-    assert code == 0 and "Torque residual overlays" in (tmp_path / "r.html").read_text()
+    html = (tmp_path / "r.html").read_text()
+    assert code == 0 and "Torque residual overlays" in html and "Residual left by frequency band" in html
     code = main(["sysid", "compare", str(friction), "--space", "position"])
     err = capsys.readouterr().err
     assert code == 2 and "--space torque" in err

@@ -3,7 +3,8 @@
 The residual is the inverse dynamics of the URDF at the measured state, ``tau − ID(q, q̇, q̈)``
 (``sysid/torque/space.py``); the model's terms should reproduce it. Sections: per-joint held-out
 RMSE (nominal, model, noise floor), overlays of the measured residual and the model's terms on the
-first held-out trajectory, residual left vs q̇, and the ``auto`` waterfall / friction curves.
+first held-out trajectory, the residual left by frequency band, residual left vs q̇, and the ``auto``
+waterfall / friction curves.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ UNIT = "N·m"
 
 
 def torque_sections(train, held, model=None, auto=None) -> list[tuple[str, str]]:
-    from realm_ms.sysid.torque.space import TorqueSet, predict, rmse, torque_arm
+    from realm_ms.sysid.torque.space import TorqueSet, predict, residual_bands, rmse, torque_arm
     from realm_ms.sysid.torque.verbs import terms_of
 
     arm = torque_arm()
@@ -55,6 +56,15 @@ def torque_sections(train, held, model=None, auto=None) -> list[tuple[str, str]]
             a.legend(fontsize=7, ncol=3, loc="upper right")
     ax[-1, 0].set_xlabel(f"time in {held[0].name} (scored part) [s]")
     out.append(("Torque residual overlays (held-out)", to_img(fig, "torque overlays")))
+
+    bands = residual_bands(he, terms)
+    rows = [[name, f"{100 * share:.1f}%"] + [f"{x:.3f}" for x in row]
+            for name, share, row in zip(bands["bands"], bands["share"], bands["rms_per_joint"])]
+    out.append(("Residual left by frequency band (held-out)",
+                "<p class='note'>RMS of what the model leaves, split by an FFT mask per trajectory (the squares add "
+                "up). Rigid-body and friction terms act at the motion's frequencies; what is left above 10 Hz "
+                "(joint elasticity, structural modes, torque-sensor dynamics) no library effect reaches.</p>"
+                + table(["band", "share of power"] + [f"{j} [{UNIT}]" for j in JOINTS], rows)))
 
     left = he.tau - he.nominal - predict(terms, he.samples, len(he.tau))
     v = he.samples.qd.numpy()
