@@ -94,14 +94,6 @@ def test_render_rgb_array_and_record_episode(tmp_path):
 
 
 @pytest.mark.render
-def test_ray_traced_frame_renders_on_cpu():
-    env = gym.make(ENV, obs_mode="rgb", shader="rt-fast", **SMALL)
-    obs, _ = env.reset(seed=0)
-    img = obs["sensor_data"]["exterior_1"]["rgb"][0].float()
-    assert img.std() > 5 and img.mean() > 10
-    env.close()
-
-
 def test_seeded_reset_is_reproducible_and_seeds_differ():
     env = gym.make(ENV, obs_mode="state")
     u = env.unwrapped
