@@ -145,6 +145,7 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
         verdict = "partially_explained"
     else:
         verdict = "unexplained"
+    at_bounds = model.params_at_bounds()
     out = {
         "unit": "rad",
         "nominal_heldout_rmse": nominal,
@@ -154,8 +155,8 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
         "details": {"judging_floor": floor, "found_factor": cfg.diagnose.found_factor,
                     "saturated_fraction": round(float(d.saturated_fraction), 4),
                     "rejected": [{"effect": s.effect, "heldout_rmse": s.heldout_rmse} for s in steps if not s.kept],
-                    "at_bounds": model.params_at_bounds(),
-                    "message": _message(verdict, nominal, current, floor, kept, model.params_at_bounds())},
+                    "at_bounds": at_bounds,
+                    "message": _message(verdict, nominal, current, floor, kept, at_bounds)},
         "_model": model,
     }
     log(out["details"]["message"])

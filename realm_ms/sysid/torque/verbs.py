@@ -220,8 +220,9 @@ def auto(train, held, model=None, config=None, log=print) -> dict:
     bands = residual_bands(sets[1], terms)
     at_bounds = final_model.params_at_bounds()
     msg = _message(verdict, nominal, current, floor, kept, at_bounds).replace(" rad", f" {UNIT}")
-    if verdict != "at_floor" and high_frequency_note(bands):
-        msg += "; " + high_frequency_note(bands)
+    note = high_frequency_note(bands) if verdict != "at_floor" else ""
+    if note:
+        msg += "; " + note
     return {"unit": UNIT, "nominal_heldout_rmse": nominal, "steps": steps,
             "final": {"heldout_rmse": current, "noise_floor": noise, "verdict": verdict},
             "friction_curve": friction_curve(final_model),
