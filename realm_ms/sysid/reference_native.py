@@ -223,7 +223,10 @@ def synth_native(effects: str, out, seed: int = 0, n_train: int = 7, n_heldout: 
     out = Path(out)
     for i, c in enumerate(cmds):
         ticks = int(round((len(c) - 1) / control_hz * law_hz))
-        k = np.minimum((np.arange(ticks) / law_hz * control_hz + 1e-9).astype(int), len(c) - 1)
+        # command j takes over at the tick nearest j / control_hz, the tick its log sample falls on:
+        # a switch one tick after the sample would log the previous command held for a whole period
+        switch = np.round(np.arange(len(c)) * law_hz / control_hz).astype(int)
+        k = np.searchsorted(switch, np.arange(ticks), side="right") - 1
         q, qd, tau = ref.rollout_torque(c[0], c[k])
         t = np.arange(ticks + 1) / law_hz
         q_cmd = c[np.minimum(k.tolist() + [k[-1]], len(c) - 1)]
