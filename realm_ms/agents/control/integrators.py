@@ -43,6 +43,8 @@ class Explicit:
         bias = t.bias_at(q_m)
         if state is not None:
             state.extra["bias"] = bias  # model feed-forward, reused by effects (saves them an RNEA)
+            if drv.actuation.within_step:
+                state.extra["plant"] = _plant(drv, state)
         tau = (t["kp"] @ (q_t - q_m)[..., None] - t["kd"] @ qd_m[..., None])[..., 0] + bias
         tau = _deliver(drv, drv.be.clip(tau, drv.neg_effort_limits, drv.effort_limits), None, qd, state, None, dt)
         drv.time = drv.time + dt
@@ -84,7 +86,7 @@ class Exact(Explicit):
             state.extra["bias"] = bias
             ext = ext + _measured_feedforward_load(drv, q, qd, q_m, qd_m, bias)
             if act.within_step:
-                within = _within_step_torque(drv, state, q_m - q_t, qd - qd_m)
+                within = _within_step_torque(drv, state, q_m - q_t, qd - qd_m, (t["mass"], t["minv"], ext))
         tau, v_end, v_avg, f_step = self._step(drv, q_m - q_t, qd_m, qd_held + (qd_m - qd), t, bias, ext, dt, within)
         tau = tau + bias
         clamped = be.clip(tau, drv.neg_effort_limits, drv.effort_limits)
@@ -173,14 +175,28 @@ def _deliver(drv, clamped, excess, qd, state, f_step, dt: float, within_step: bo
     return tau
 
 
-def _within_step_torque(drv, state: ControlState, err0: torch.Tensor, qd_offset: torch.Tensor):
+def _plant(drv, state: ControlState):
+    """(M, M⁻¹, loads) of the plant at the true state: the arm's mass matrix with armature and the
+    stages' known plant inertia, and the loads the controller does not cancel, for the stages'
+    implicit friction steps (the exact step hands over its own, ``_within_step_torque``)."""
+    act, be = drv.actuation, drv.be
+    mass = be.mass(be.kin(state.q)) + drv.arm
+    extra, load = act.plant_inertia(state), act.plant_load(state)
+    if extra is not None:
+        mass = mass + extra
+    return mass, be.inv(mass), torch.zeros_like(state.q) if load is None else load
+
+
+def _within_step_torque(drv, state: ControlState, err0: torch.Tensor, qd_offset: torch.Tensor, plant):
     """(e, v, law torque, tick) -> the within-step stages' plant torque at that tick, from the true
-    state the tick reaches (``qd_offset``: true minus measured velocity, held over the step)."""
+    state the tick reaches (``qd_offset``: true minus measured velocity, held over the step).
+    ``plant``: (M, M⁻¹, load) the ticks integrate M q̈ = τ − b + load + f on, for the stages' own
+    implicit steps."""
     act, q0 = drv.actuation, state.q
 
     def torque(e, v, tau, t):
         tick = ControlState(q=q0 + (e - err0), qd=v + qd_offset, q_target=state.q_target, dt=t, model=drv.model,
-                            time=state.time, extra={"tau_motor": tau, "bias": state.extra["bias"]})
+                            time=state.time, extra={"tau_motor": tau, "bias": state.extra["bias"], "plant": plant})
         f = act.plant_torque(tick, within_step=True)
         return torch.zeros_like(e) if f is None else f
 

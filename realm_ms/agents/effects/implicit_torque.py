@@ -30,6 +30,11 @@ class ImplicitJointTorque(Effect):
     of the law inside the physics step (``within_step``), from the tick's velocity and law torque:
     a friction torque held over a whole 8.3 ms step, or lagged by one, cannot follow the wrist's
     loop, which settles within a step (h Kd / I ~ 3), and sticks or slides at the wrong moments.
+    The driver then also hands over the plant it integrates the ticks on (``state.extra["plant"]``:
+    M with the known plant inertia, M⁻¹, and the loads beyond the law, such as a payload's
+    gravity), and the step uses those: with the nominal M and no load, a payload the controller
+    does not compensate reads as motion the friction must stop, and the arm holds still where it
+    should sag or slides where it should stick.
     """
 
     order = 90
@@ -73,12 +78,33 @@ class ImplicitJointTorque(Effect):
         state.extra["tau_motor"] = tau
         return tau
 
-    def free_velocity(self, state: ControlState, rows: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
-        """(v_free, I_j) on ``rows``: the velocity this step would end with without this effect."""
-        inertia = self._joint_inertia(state)
-        qd = state.qd
+    def plant(self, state: ControlState, rows: torch.Tensor | None = None):
+        """(M, M⁻¹, net torque τ_motor − b(q, q̇) + loads) of the plant the driver integrates this
+        tick, on ``rows``; None when the driver gave no plant (the step's M is then the nominal
+        arm's at the segment's reset, and no load is known)."""
+        plant, tau = state.extra.get("plant"), state.extra.get("tau_motor")
+        if plant is None or tau is None:
+            return None
+        b = state.q.shape[0]
+        mass, minv, ext = (x.expand(b, *x.shape[1:]) if x.shape[0] != b else x for x in plant)
+        net = tau - model_bias(state) + ext
         if rows is not None:
-            inertia, qd = inertia[rows], qd[rows]
+            mass, minv, net = mass[rows], minv[rows], net[rows]
+        return mass, minv, net
+
+    def free_velocity(self, state: ControlState, rows: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """(v_free, I_j) on ``rows``: the velocity this step would end with without this effect,
+        and the apparent inertia SAFETY / (M⁻¹)_jj of each joint."""
+        qd = state.qd if rows is None else state.qd[rows]
+        plant = self.plant(state, rows)
+        if plant is not None:
+            _, minv, net = plant
+            minv, net = minv.to(qd.dtype), net.to(qd.dtype)
+            inertia = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
+            return qd + state.dt * (minv @ net.unsqueeze(-1)).squeeze(-1), inertia
+        inertia = self._joint_inertia(state)
+        if rows is not None:
+            inertia = inertia[rows]
         tau = state.extra.get("tau_motor")
         if tau is None:
             return qd, inertia
@@ -97,9 +123,13 @@ class ImplicitJointTorque(Effect):
         tau = state.extra.get("tau_motor")
         if self.coupled and tau is not None:
             qd = state.qd if rows is None else state.qd[rows]
-            mass = self.mass_matrix(state, rows).to(qd.dtype)
-            net = ((tau if rows is None else tau[rows]) - model_bias(state, rows)).to(qd.dtype)
-            return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass, net))
+            plant = self.plant(state, rows)
+            if plant is None:
+                mass = self.mass_matrix(state, rows)
+                net = (tau if rows is None else tau[rows]) - model_bias(state, rows)
+            else:
+                mass, _, net = plant
+            return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass.to(qd.dtype), net.to(qd.dtype)))
         # no motor torque this tick, or a per-joint effect: the per-joint form
         v_free, inertia = self.free_velocity(state, rows)
         return scatter_rows(state.q, rows, self.friction_torque(v_free, inertia, state, rows))
