@@ -8,7 +8,11 @@ the GPU-parallel population (speed-up recorded).
     python bench/sysid.py --auto [--hidden ...] [--engine mujoco]   # `realm sysid auto` wall time (goal < 5 min)
     python bench/sysid.py --torque [--hidden frictionloss]             # `auto` on 10 x 10 s MuJoCo-native torque logs
 
+    python bench/sysid.py --native-sweep [--space torque|position] [--size 3,2,6] [--seeds 0,1,2] [--effects ...]
     python bench/sysid.py --friction-laws [--size 3,2,6] [--seeds 0,1,2]  # which friction law fits which
+
+``--native-sweep``: ``auto`` on every MuJoCo-native variant (``reference_native.VARIANTS``), torque
+or position space, one row per variant and seed to ``--out`` (JSON) and ``.md``.
 
 ``--friction-laws``: for MuJoCo-native data whose friction is MuJoCo's ``frictionloss``, Gaz et
 al.'s sigmoid or LuGre, torque-space ``fit`` of each friction combination (``FRICTION_FITS``):
@@ -75,41 +79,53 @@ def run_auto(args, data: Path, space: str) -> dict:
     return r
 
 
-def run_torque_sweep(args) -> int:
-    """`auto` in torque space on every MuJoCo-native variant (reference_native.VARIANTS)."""
+def run_native_sweep(args) -> int:
+    """`auto` on every MuJoCo-native variant (reference_native.VARIANTS), in ``args.space``: torque
+    logs (t, q, qd, tau) or position logs with the 15 Hz command (q_cmd), both at 1 kHz. Each
+    finished case is written at once."""
+    from realm_ms.sysid import api
     from realm_ms.sysid.data_io import load_split
     from realm_ms.sysid.reference_native import VARIANTS, synth_native
     from realm_ms.sysid.torque import verbs
 
     n_train, n_held, dur = (int(x) for x in args.size.split(","))
+    position = args.space == "position"
+    unit = "mrad" if position else "N·m"
+    scale = 1e3 if position else 1.0
     rows = []
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
+    quiet = lambda m: print("  " + m, file=sys.stderr)  # noqa: E731
     for seed in (int(x) for x in args.seeds.split(",")):
         for name in (args.effects.split(",") if args.effects else VARIANTS):
             t0 = time.perf_counter()
             with tempfile.TemporaryDirectory() as tmp:
                 synth_native(name, Path(tmp), seed=seed, n_train=n_train, n_heldout=n_held, duration_s=float(dur),
-                             with_cmd=False)
-                train, held = load_split(Path(tmp))
-            a = verbs.auto(train, held, log=lambda m: print("  " + m, file=sys.stderr))
+                             with_cmd=position)
+                if position:
+                    a = api.auto(tmp, workers=args.workers, device="cpu", log=quiet, space="position")
+                else:
+                    a = verbs.auto(*load_split(Path(tmp)), log=quiet)
             f = a["final"]
             floor = a["details"]["judging_floor"]
-            row = {"variant": name, "spec": VARIANTS[name], "seed": seed, "nominal": a["nominal_heldout_rmse"],
-                   "steps": [(x["effect"], x["heldout_rmse"]) for x in a["steps"]], "final": f["heldout_rmse"],
-                   "floor": floor, "ratio": f["heldout_rmse"] / floor, "verdict": f["verdict"],
+            row = {"space": args.space, "variant": name, "spec": VARIANTS[name], "seed": seed,
+                   "nominal": a["nominal_heldout_rmse"], "steps": [(x["effect"], x["heldout_rmse"]) for x in a["steps"]],
+                   "final": f["heldout_rmse"], "floor": floor, "ratio": f["heldout_rmse"] / floor, "verdict": f["verdict"],
                    "params": a["steps"][-1]["params"] if a["steps"] else {}, "wall_s": time.perf_counter() - t0}
             rows.append(row)
-            print(f"{name} seed {seed}: {row['nominal']:.3f} -> " + " -> ".join(f"+{e} {v:.3f}" for e, v in row["steps"])
-                  + f" N·m; {row['ratio']:.2f}x floor {floor:.3f}: {row['verdict']} ({row['wall_s']:.0f} s)", flush=True)
-            lines = ["| native variant | seed | nominal [N·m] | auto steps (held-out after) | final / floor | verdict |",
-                     "|---|---|---|---|---|---|"]
+            print(f"{name} seed {seed}: {scale * row['nominal']:.3f} -> "
+                  + " -> ".join(f"+{e} {scale * v:.3f}" for e, v in row["steps"])
+                  + f" {unit}; {row['ratio']:.2f}x floor {scale * floor:.3f}: {row['verdict']} ({row['wall_s']:.0f} s)",
+                  flush=True)
+            lines = [f"| native variant | seed | nominal [{unit}] | auto steps (held-out after) | final / floor | verdict | wall |",
+                     "|---|---|---|---|---|---|---|"]
             for r in rows:
-                st = ", ".join(f"+{e} ({v:.3f})" for e, v in r["steps"]) or "-"
-                lines.append(f"| {r['variant']} | {r['seed']} | {r['nominal']:.3f} | {st} | {r['final']:.3f} / "
-                             f"{r['floor']:.3f} = {r['ratio']:.2f}x | {r['verdict']} |")
+                st = ", ".join(f"+{e} ({scale * v:.3f})" for e, v in r["steps"]) or "-"
+                lines.append(f"| {r['variant']} | {r['seed']} | {scale * r['nominal']:.3f} | {st} | {scale * r['final']:.3f} / "
+                             f"{scale * r['floor']:.3f} = {r['ratio']:.2f}x | {r['verdict']} | {r['wall_s']:.0f} s |")
             out.write_text(json.dumps(rows, indent=2, default=float))
-            out.with_suffix(".md").write_text("\n".join(lines) + f"\n\n{n_train}+{n_held} trajectories x {dur} s at 1 kHz\n")
+            out.with_suffix(".md").write_text("\n".join(lines) + f"\n\n{args.space} space, {n_train}+{n_held} "
+                                              f"trajectories x {dur} s at 1 kHz\n")
     return 0
 
 
@@ -217,8 +233,10 @@ def main() -> int:
     ap.add_argument("--fresh", action="store_true", help="--sweep: ignore the cases an earlier run left in --out")
     ap.add_argument("--auto", action="store_true", help="time `realm sysid auto` (position space)")
     ap.add_argument("--torque", action="store_true", help="time `auto` in torque space on MuJoCo-native torque logs")
-    ap.add_argument("--torque-sweep", action="store_true", help="`auto` in torque space on every MuJoCo-native variant")
-    ap.add_argument("--size", default="7,3,10", help="--torque-sweep: train,heldout,seconds per trajectory")
+    ap.add_argument("--native-sweep", action="store_true", help="`auto` on every MuJoCo-native variant (--space)")
+    ap.add_argument("--space", choices=["torque", "position"], default="torque",
+                    help="--native-sweep: torque logs, or position logs with the 15 Hz command")
+    ap.add_argument("--size", default="7,3,10", help="--native-sweep, --friction-laws: train,heldout,seconds per trajectory")
     ap.add_argument("--friction-laws", action="store_true",
                     help="torque-space fits of friction combinations on frictionloss / Gaz / LuGre plants")
     args = ap.parse_args()
@@ -226,8 +244,8 @@ def main() -> int:
         return run_friction_laws(args)
     if args.sweep:
         return run_sweep(args)
-    if args.torque_sweep:
-        return run_torque_sweep(args)
+    if args.native_sweep:
+        return run_native_sweep(args)
     if args.auto or args.torque:
         with tempfile.TemporaryDirectory() as tmp:
             data = Path(tmp) / "data"
