@@ -75,3 +75,40 @@ def test_auto_start_spec_falls_back_to_the_bare_name():
 
     assert _start_spec("latency", {"delay": 0.02}) == "latency:delay=0.02"
     assert _start_spec("latency", {"delay": 9.0}) == "latency"  # outside the bounds: start from off
+
+
+def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeypatch):
+    """The screening ranks Coulomb first and cannot tell smooth friction from it: both are fitted in
+    full and the one with the lower held-out error is kept; a suspect that is no look-alike waits
+    for the next round."""
+    from types import SimpleNamespace
+
+    from realm_ms.agents.robot_model import RobotModel
+    from realm_ms.sysid import auto as auto_mod
+
+    held_after = {"coulomb_friction": 0.53e-3, "smooth_friction": 0.47e-3, "latency": 0.52e-3}
+    rounds = []
+
+    def diagnose(train, held, model, cfg, evaluator, log):
+        rounds.append(model)
+        sus = [] if len(rounds) > 1 else [_s("coulomb_friction", 5.6e-3, 0.6e-3), _s("smooth_friction", 5.6e-3, 0.7e-3),
+                                          _s("latency", 5.6e-3, 0.8e-3)]
+        if sus:
+            sus[0].confounded_with = ["smooth_friction"]
+        return SimpleNamespace(baseline_heldout_rmse=5.6e-3, noise_floor=1e-4, saturated_fraction=0.0,
+                               suspects=sus, verdict="partially_explained")
+
+    fitted = []
+
+    def fit(train, held, model, config, evaluator, progress, log):
+        name = config.add.split(":")[0]
+        fitted.append(name)
+        return SimpleNamespace(after={"heldout_rmse_rad": held_after[name]}, params={f"{name}.x": 1.0}, model=RobotModel())
+
+    monkeypatch.setattr(auto_mod, "diagnose", diagnose)
+    monkeypatch.setattr(auto_mod, "fit", fit)
+    out = auto_mod.auto([], [], progress=False, log=lambda *a: None)
+    assert fitted == ["coulomb_friction", "smooth_friction"]
+    assert [s["effect"] for s in out["steps"]] == ["smooth_friction"]
+    assert out["final"]["heldout_rmse"] == pytest.approx(0.47e-3)
+    assert out["details"]["rejected"] == [{"effect": "coulomb_friction", "heldout_rmse": 0.53e-3}]
