@@ -77,16 +77,17 @@ def test_auto_start_spec_falls_back_to_the_bare_name():
     assert _start_spec("latency", {"delay": 9.0}) == "latency"  # outside the bounds: start from off
 
 
-def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeypatch):
+@pytest.mark.parametrize("coulomb_after", [0.53e-3, 0.3e-3])
+def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeypatch, coulomb_after):
     """The screening ranks Coulomb first and cannot tell smooth friction from it: both are fitted in
     full and the one with the lower held-out error is kept; a suspect that is no look-alike waits
-    for the next round."""
+    for the next round. A top suspect that reaches the floor (1.5 x 0.27 mrad) ends the round."""
     from types import SimpleNamespace
 
     from realm_ms.agents.robot_model import RobotModel
     from realm_ms.sysid import auto as auto_mod
 
-    held_after = {"coulomb_friction": 0.53e-3, "smooth_friction": 0.47e-3, "latency": 0.52e-3}
+    held_after = {"coulomb_friction": coulomb_after, "smooth_friction": 0.47e-3, "latency": 0.52e-3}
     rounds = []
 
     def diagnose(train, held, model, cfg, evaluator, log):
@@ -108,6 +109,9 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeyp
     monkeypatch.setattr(auto_mod, "diagnose", diagnose)
     monkeypatch.setattr(auto_mod, "fit", fit)
     out = auto_mod.auto([], [], progress=False, log=lambda *a: None)
+    if coulomb_after < 0.4e-3:
+        assert fitted == ["coulomb_friction"] and [s["effect"] for s in out["steps"]] == ["coulomb_friction"]
+        return
     assert fitted == ["coulomb_friction", "smooth_friction"]
     assert [s["effect"] for s in out["steps"]] == ["smooth_friction"]
     assert out["final"]["heldout_rmse"] == pytest.approx(0.47e-3)

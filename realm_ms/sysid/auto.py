@@ -3,7 +3,7 @@
 Each round ranks the effects still missing from the current model (``diagnose``, screening
 with the model's own parameters re-tuned), fits the best suspect jointly with everything already
 kept (``fit`` with refit, started at the screened values) -- and each look-alike the diagnosis could
-not tell from it (``contenders``), keeping the one that fits best -- and **keeps the step only when the
+not tell from it (``contenders``, until one reaches the floor), keeping the one that fits best -- and **keeps the step only when the
 held-out RMSE falls by more than noise allows**: by at least ``min_gain`` of its current value and
 by at least ``min_floor_drop`` x the judging floor (a fit that only absorbed noise on the train
 split does not lower the held-out error that much). A rejected suspect is not tried again; the
@@ -133,6 +133,8 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
                                                      popsize=cfg.popsize, seed=cfg.seed), evaluator, progress=False, log=quiet)
             bar.update(1)
             fitted.append((float(f.after["heldout_rmse_rad"]), sus, f))
+            if fitted[-1][0] <= cfg.diagnose.found_factor * floor:
+                break  # at the floor: no look-alike can do visibly better
         if len(fitted) > 1:
             fitted.sort(key=lambda x: x[0])
             for after, sus, _ in fitted[1:]:
