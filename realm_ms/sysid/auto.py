@@ -3,10 +3,10 @@
 Each round ranks the effects still missing from the current model (``diagnose``, screening
 with the model's own parameters re-tuned), fits the best suspect jointly with everything already
 kept (``fit`` with refit, started at the screened values) -- and each look-alike the diagnosis could
-not tell from it (``contenders``, until one reaches the floor), keeping the one that fits best -- and **keeps the step only when the
-held-out RMSE falls by more than noise allows**: by at least ``min_gain`` of its current value and
-by at least ``min_floor_drop`` x the judging floor (a fit that only absorbed noise on the train
-split does not lower the held-out error that much). A rejected suspect is not tried again; the
+not tell from it (``contenders``, until one reaches the floor), keeping the one that fits best --
+and **keeps the step only when the held-out RMSE falls by more than noise allows**: by at least
+``min_gain`` of its current value and by at least ``min_floor_drop`` x the judging floor (a fit that
+only absorbed noise on the train split does not lower the held-out error that much). A rejected suspect is not tried again; the
 next one is. The loop stops at the floor (held-out RMSE <= ``found_factor`` x the judging floor),
 when no suspect helps, or after ``max_steps`` kept steps / ``max_fits`` fits.
 
