@@ -21,7 +21,7 @@ import numpy as np
 import sapien
 import torch
 from mani_skill.envs.sapien_env import BaseEnv
-from mani_skill.sensors.camera import CameraConfig
+from mani_skill.sensors.camera import Camera, CameraConfig
 from mani_skill.utils import sapien_utils
 from mani_skill.utils.structs.pose import Pose
 from mani_skill.utils.structs.types import GPUMemoryConfig, SceneConfig, SimConfig
@@ -318,6 +318,20 @@ class RealmEnv(BaseEnv):
         self.perturbations.override = None
         info["perturbation"] = self.perturbations.record()
         return obs, info
+
+    def capture_sensor_data(self):
+        """ManiSkill submits every camera's frame, then waits for them all. On a software Vulkan device
+        (lavapipe, Mesa 25.0) several ray-traced frames in flight at once crash its queue thread
+        (SIGSEGV in about one capture in two) or corrupt the first frame: there each ray-traced frame
+        is finished before the next is submitted. (The second read of the picture in ``get_obs`` is a
+        host copy; raster frames do not race and keep ManiSkill's overlap.)"""
+        if self.backend.render_device is None or self.backend.render_device.is_cuda():
+            return super().capture_sensor_data()
+        for sensor in self._sensors.values():
+            sensor.capture()
+            if isinstance(sensor, Camera) and sensor.config.shader_config.shader_pack.startswith("rt"):
+                for cam in sensor.camera._render_cameras:
+                    cam.get_picture(cam.get_picture_names()[0])
 
     def _get_obs_sensor_data(self, apply_texture_transforms: bool = True) -> dict:
         if not self.capture_sensors and self._last_sensor_data is not None:
