@@ -44,3 +44,33 @@ def test_linearized_step_recovers_a_viscous_coefficient(tmp_path):
     assert out["improved"] and out["mse_after"] < 0.05 * out["mse_before"]
     vals = g.effects[0].values()
     assert vals["b2"] == pytest.approx(0.8, rel=0.2) and vals["b4"] == pytest.approx(0.8, rel=0.2)
+
+
+def test_a_zero_mass_payload_reports_its_centre_of_mass_as_insensitive_and_restarts_from_typical(tmp_path):
+    """At zero mass the payload's centre of mass does nothing: the screening step must say so (the
+    diagnosis then re-screens from the typical strengths), and the typical start moves only the
+    parameters asked for."""
+    from realm_ms.sysid.data_io import load_dir
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.sysid.engine import Evaluator
+    from realm_ms.sysid.optimize import Group, linearized_step, typical_start
+    from realm_ms.sysid.replay import SegmentSet
+    from realm_ms.sysid.synth import SynthConfig, synth
+
+    ev = Evaluator(workers=1, device="cpu")
+    synth("payload:mass=0.8,com_x=0.12,com_z=0.05", tmp_path, SynthConfig(seed=1, noise_rad=1e-4, n_train=1, n_heldout=1, duration_s=4),
+          evaluator=ev)
+    ss = SegmentSet.build(load_dir(tmp_path / "train"), 120.0)
+    g = Group.of([make_effect("payload"), make_effect("viscous_damping", {"b2": 0.3})])
+    assert g.effects[0].values()["mass"] == 0.0
+    alone = Group.of([make_effect("payload")])
+    out = linearized_step(ev, ss, [], [alone], first=True, block=True)[0]
+    keys = [alone.params.params[k].local_key for k in out["insensitive"]]
+    assert {"com_x", "com_y", "com_z"} <= set(keys) and "mass" not in keys
+
+    alt = typical_start(g, {p.key for p in g.effects[0].free_params})
+    assert alt.effects[0].values()["mass"] == pytest.approx(0.5)  # the payload's typical mass
+    assert alt.effects[1].values()["b2"] == pytest.approx(0.3)  # the other effect where it was
+    assert g.effects[0].values()["mass"] == 0.0 and alt.effects[0] is not g.effects[0]  # a copy
+    out = linearized_step(ev, ss, [], [alt], first=True, block=True)[0]
+    assert not {"com_x", "com_y", "com_z"} & {alt.params.params[k].local_key for k in out["insensitive"]}

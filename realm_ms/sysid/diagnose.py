@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
-from realm_ms.sysid.optimize import Group, evaluate_groups, linearized_step
+from realm_ms.sysid.optimize import Group, copy_effect, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.saturation import PAD_S
 from realm_ms.agents.robot_model import RobotModel
@@ -134,7 +134,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     retune = bool(cfg.retune_model and base)
 
     def copies() -> list:
-        return [make_effect(fx.name, fx.values(), _config(fx)) for fx in base] if retune else []
+        return [copy_effect(fx) for fx in base] if retune else []
 
     fixed = [] if retune else base
     present = set(model.names)
@@ -160,6 +160,16 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     groups = [Group.of([make_effect(n)] + copies()) for n in names]
     log(f"screening {len(groups)} effects ({sum(len(g.params) for g in groups)} parameters)")
     steps = linearized_step(ev, tr_ss, fixed, groups, first=True, block=True, also=[he_ss])
+    # an effect with parameters that do nothing at its off-values (a payload's centre of mass at zero
+    # mass) gets one linearised step from its typical strengths too, as a fit's second start does
+    redo = [i for i, (g, st) in enumerate(zip(groups, steps)) if _own_insensitive(g, st)]
+    if redo:
+        log("re-screening " + ", ".join(f"{names[i]} (at its off-values {', '.join(_own_insensitive(groups[i], steps[i]))} "
+                                          "change nothing)" for i in redo) + " from typical strengths")
+        alts = [typical_start(groups[i], {p.key for p in groups[i].effects[0].free_params}) for i in redo]
+        for i, g, st in zip(redo, alts, linearized_step(ev, tr_ss, fixed, alts, first=True, block=True, also=[he_ss])):
+            if st["improved"] and st["mse_after"] < steps[i]["mse_after"]:
+                groups[i], steps[i] = g, st
     tr_mse = np.array([st["mse_after"] for st in steps])
     he_mse = np.array([st["scores"][1][0][0] if st["improved"] else b_he[0][0] for st in steps])
     order = np.argsort(he_mse)
@@ -262,10 +272,10 @@ def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg:
                            f"{shares}. A structural mismatch (plant, controller or data) is likely"), floor
 
 
-def _config(fx) -> dict:
-    from dataclasses import asdict
-
-    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
+def _own_insensitive(group: Group, step: dict) -> list[str]:
+    """The candidate effect's own parameters (not the re-tuned model's) whose probe did nothing, by name."""
+    own, ps = group.effects[0].name, group.params.params
+    return list(dict.fromkeys(ps[k].spec.name for k in step["insensitive"] if ps[k].effect == own))
 
 
 def _arm_model():

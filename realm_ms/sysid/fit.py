@@ -15,8 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from realm_ms.agents.effects import make_effect
-from realm_ms.sysid.optimize import Group, cma_fit, confidence_intervals, evaluate_groups, linearized_step
+from realm_ms.sysid.optimize import Group, cma_fit, confidence_intervals, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
@@ -102,12 +101,7 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     # Stick-slip effects (stiction) have local minima that one start can fall into.
     starts = [group]
     if cfg.multistart:
-        alt = Group.of([make_effect(fx.name, fx.values(), _config(fx)) for fx in fitted])
-        u_nom = alt.params.to_unit(alt.params.nominal())
-        added_keys = {p.key for fx in added for p in fx.free_params}
-        u_alt = np.array([u_nom[i] if p.key in added_keys else alt.u[i] for i, p in enumerate(alt.params)])
-        alt.apply(u_alt)
-        starts.append(alt)
+        starts.append(typical_start(group, {p.key for fx in added for p in fx.free_params}))
     gn_hist = []
     mse = [np.inf] * len(starts)
     for it in range(cfg.gn_iterations):
@@ -145,12 +139,6 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     bounds = {p.key: [p.spec.lo, p.spec.hi] for p in group.params}
     return FitResult(out_model, [fx.name for fx in fitted], params, before, after, res.history, gn_hist, units, bounds,
                      uncertainty)
-
-
-def _config(fx) -> dict:
-    from dataclasses import asdict
-
-    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
 
 
 def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: float = 8.0, burn_in_s: float = 1.0,

@@ -59,6 +59,25 @@ class Group:
         return self.params.as_dict(self.params.from_unit(self.u))
 
 
+def copy_effect(fx: Effect) -> Effect:
+    """An independent effect with ``fx``'s values and configuration."""
+    from dataclasses import asdict
+
+    config = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
+    return make_effect(fx.name, fx.values(), config)
+
+
+def typical_start(group: Group, keys: set[str]) -> Group:
+    """A copy of ``group`` with the parameters in ``keys`` at their typical (nominal) strengths and
+    the others where ``group`` has them: the second start of a linearised fit, for effects whose
+    off-values are a poor place to linearise (a payload of zero mass has no centre of mass to
+    probe; a stick-slip law has local minima)."""
+    alt = Group.of([copy_effect(fx) for fx in group.effects])
+    u_nom = alt.params.to_unit(alt.params.nominal())
+    alt.apply(np.array([u_nom[i] if p.key in keys else group.u[i] for i, p in enumerate(alt.params)]))
+    return alt
+
+
 def batch_effects(base: list[Effect], rows: list[dict[str, np.ndarray]], all_names: list[str], configs: dict) -> list[Effect]:
     """Stack per-candidate theta rows into batched effect instances (one per effect name).
     ``rows[c][name]`` is the (1, n) theta of effect ``name`` in candidate c; missing = off."""
@@ -113,6 +132,11 @@ def evaluate_groups(evaluator, segsets: list[SegmentSet], base: list[Effect], gr
     return results
 
 
+#: a probe whose rollout moves no sample by more than this saw nothing (float32 rollouts differ by
+#: ~1e-6 rad when only their batch neighbours change; measurement noise is >= 1e-4 rad)
+PROBE_RESOLUTION_RAD = 1e-5
+
+
 def probe_steps(ps: ParamSet, u: np.ndarray, first: bool) -> np.ndarray:
     """Secant step per parameter: towards the nominal strength (from off) on the first iteration,
     30 % of that afterwards; never zero, always inside [0, 1]."""
@@ -143,7 +167,8 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
     one probe rollout per parameter (or per block, see ``probe_blocks``) for the secant
     sensitivities, then the full and the half step evaluated on ``ss`` (+ ``also``) in one batch.
     Each group moves to the better step if it lowers the loss on ``ss``. Returns per group
-    {'mse_before', 'mse_after', 'scores': [(mse, per_joint_mse, sim) on ss and each of also]}."""
+    {'mse_before', 'mse_after', 'scores': [(mse, per_joint_mse, sim) on ss and each of also],
+    'insensitive': indices of the parameters whose probe did not change the simulation}."""
     pts, plans = [], []
     for g in groups:
         h = probe_steps(g.params, g.u, first)
@@ -173,6 +198,9 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
                 else:
                     cols[:, k] = dy.ravel() / h[k]
         ok = np.isfinite(cols).all(axis=0) & (np.abs(cols).sum(axis=0) > 0)
+        # a probe that moves no sample by more than float32 noise found nothing to linearise
+        moved = np.where(np.isfinite(cols), np.abs(cols), np.inf).max(axis=0, initial=0.0) * np.abs(h)
+        g._insensitive = [int(k) for k in np.nonzero(moved < PROBE_RESOLUTION_RAD)[0]]
         delta = np.zeros(len(h))
         if ok.any() and np.isfinite(r).all():
             Jo = cols[:, ok]
@@ -196,7 +224,7 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
             g.apply(c[1 + best])
         scores = [(s[gi][0][best:best + 1], s[gi][1][best:best + 1], s[gi][2][best:best + 1]) for s in res2] if improved else None
         out.append({"mse_before": g._mse0, "mse_after": float(min(mse[best], g._mse0)), "improved": bool(improved),
-                    "scores": scores})
+                    "scores": scores, "insensitive": g._insensitive})
     return out
 
 
