@@ -162,10 +162,11 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     steps = linearized_step(ev, tr_ss, fixed, groups, first=True, block=True, also=[he_ss])
     # an effect with parameters that do nothing at its off-values (a payload's centre of mass at zero
     # mass) gets one linearised step from its typical strengths too, as a fit's second start does
-    redo = [i for i, (g, st) in enumerate(zip(groups, steps)) if _own_insensitive(g, st)]
+    inert = {i: _own_insensitive(g, st) for i, (g, st) in enumerate(zip(groups, steps))}
+    redo = [i for i, keys in inert.items() if keys]
     if redo:
-        log("re-screening " + ", ".join(f"{names[i]} (at its off-values {', '.join(_own_insensitive(groups[i], steps[i]))} "
-                                          "change nothing)" for i in redo) + " from typical strengths")
+        log("re-screening " + ", ".join(f"{names[i]} (at its off-values {', '.join(inert[i])} change nothing)" for i in redo)
+            + " from typical strengths")
         alts = [typical_start(groups[i], {p.key for p in groups[i].effects[0].free_params}) for i in redo]
         for i, g, st in zip(redo, alts, linearized_step(ev, tr_ss, fixed, alts, first=True, block=True, also=[he_ss])):
             if st["improved"] and st["mse_after"] < steps[i]["mse_after"]:

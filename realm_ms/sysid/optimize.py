@@ -61,10 +61,7 @@ class Group:
 
 def copy_effect(fx: Effect) -> Effect:
     """An independent effect with ``fx``'s values and configuration."""
-    from dataclasses import asdict
-
-    config = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
-    return make_effect(fx.name, fx.values(), config)
+    return make_effect(fx.name, fx.values(), _config_dict(fx))
 
 
 def typical_start(group: Group, keys: set[str]) -> Group:
@@ -182,7 +179,7 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
         plans.append((h, blocks))
     res = evaluate_groups(evaluator, [ss], base, groups, pts)[0]
     mask = ss.mask
-    cand = []
+    cand, insensitive = [], []
     for g, (h, blocks), (mse, _, sim) in zip(groups, plans, res):
         y0 = sim[0][mask]  # (M, 7)
         r = (ss.meas[mask] - y0).ravel()
@@ -200,7 +197,7 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
         ok = np.isfinite(cols).all(axis=0) & (np.abs(cols).sum(axis=0) > 0)
         # a probe that moves no sample by more than float32 noise found nothing to linearise
         moved = np.where(np.isfinite(cols), np.abs(cols), np.inf).max(axis=0, initial=0.0) * np.abs(h)
-        g._insensitive = [int(k) for k in np.nonzero(moved < PROBE_RESOLUTION_RAD)[0]]
+        insensitive.append([int(k) for k in np.nonzero(moved < PROBE_RESOLUTION_RAD)[0]])
         delta = np.zeros(len(h))
         if ok.any() and np.isfinite(r).all():
             Jo = cols[:, ok]
@@ -224,7 +221,7 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
             g.apply(c[1 + best])
         scores = [(s[gi][0][best:best + 1], s[gi][1][best:best + 1], s[gi][2][best:best + 1]) for s in res2] if improved else None
         out.append({"mse_before": g._mse0, "mse_after": float(min(mse[best], g._mse0)), "improved": bool(improved),
-                    "scores": scores, "insensitive": g._insensitive})
+                    "scores": scores, "insensitive": insensitive[gi]})
     return out
 
 

@@ -29,7 +29,7 @@ from mani_skill.utils.structs.types import GPUMemoryConfig, SceneConfig, SimConf
 from realm_ms.agents.control import DroidControlConfig
 from realm_ms.agents.panda_droid import PandaDroid
 from realm_ms.known_warnings import install as _silence_known_warnings
-from realm_ms.rendering import camera_shader_config, vertical_fov
+from realm_ms.rendering import camera_shader_config, is_ray_traced, vertical_fov
 from realm_ms.tasks.perturbation_set import PerturbationSet
 from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs
@@ -329,7 +329,7 @@ class RealmEnv(BaseEnv):
             return super().capture_sensor_data()
         for sensor in self._sensors.values():
             sensor.capture()
-            if isinstance(sensor, Camera) and sensor.config.shader_config.shader_pack.startswith("rt"):
+            if isinstance(sensor, Camera) and is_ray_traced(sensor.config.shader_config.shader_pack):
                 for cam in sensor.camera._render_cameras:
                     cam.get_picture(cam.get_picture_names()[0])
 
