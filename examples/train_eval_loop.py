@@ -88,10 +88,12 @@ class Recipe:
 
     @classmethod
     def quick(cls, **kw) -> Recipe:
-        return cls(tasks=("REALM-PickApple-v1",), demos=(1,), demo_max_steps=8, success_only=False, steps=2, batch_size=4, dim_model=32, n_heads=2, dim_feedforward=64,
-                   n_encoder_layers=1, chunk_size=4, n_action_steps=4, save_freq=2, log_freq=1, val_episodes=1, eval_episodes=1,
-                   table_episodes=1, table_perturbations=("Default", "V-AUG"), eval_max_steps=4, replan_every=4,
-                   workers=1, finetune_demos=1, finetune_steps=2, **kw)
+        small = dict(tasks=("REALM-PickApple-v1",), demos=(1,), demo_max_steps=8, success_only=False, steps=2, batch_size=4,
+                     dim_model=32, n_heads=2, dim_feedforward=64, n_encoder_layers=1, chunk_size=4, n_action_steps=4,
+                     save_freq=2, log_freq=1, val_episodes=1, eval_episodes=1, table_episodes=1,
+                     table_perturbations=("Default", "V-AUG"), eval_max_steps=4, replan_every=4, workers=1,
+                     finetune_demos=1, finetune_steps=2)
+        return cls(**(small | kw))
 
 
 def short(task: str) -> str:
@@ -394,6 +396,8 @@ def parse(argv=None) -> Recipe:
                     help="camera size of the demos, training and eval (default 64x48; 128x96 localises better, ~4x the compute)")
     ap.add_argument("--loader-workers", type=int, default=None,
                     help="data-loader processes for training (default: 0 on cpu, all cores but 2 on cuda)")
+    ap.add_argument("--demos", default=None, metavar="N,N",
+                    help="expert demonstrations per task, one count per task (default 60,40)")
     ap.add_argument("--quick", action="store_true", help="CI: every stage with a handful of steps (no success expected)")
     a = ap.parse_args(argv)
     from realm_ms.errors import UserError
@@ -403,9 +407,18 @@ def parse(argv=None) -> Recipe:
         a.width, a.height = parse_camera_size(a.camera_size) or (None, None)
     except UserError as e:
         ap.error(str(e))
+    if a.demos is not None:
+        tasks = (Recipe.quick() if a.quick else Recipe()).tasks
+        try:
+            a.demos = tuple(int(x) for x in a.demos.split(","))
+        except ValueError:
+            ap.error(f"--demos {a.demos!r}: give whole numbers separated by commas, e.g. 60,40")
+        if len(a.demos) != len(tasks) or min(a.demos) < 1:
+            ap.error(f"--demos needs one count >= 1 per task ({', '.join(map(short, tasks))}); "
+                     f"got {','.join(map(str, a.demos))}")
     kw = {k: v for k, v in (("out", a.out), ("device", a.device), ("threads", a.threads), ("steps", a.steps),
                             ("workers", a.workers), ("batch_size", a.batch_size),
-                            ("loader_workers", a.loader_workers), ("width", a.width),
+                            ("loader_workers", a.loader_workers), ("width", a.width), ("demos", a.demos),
                             ("height", a.height)) if v is not None}
     return Recipe.quick(**kw) if a.quick else Recipe(**kw)
 

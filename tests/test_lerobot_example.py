@@ -99,3 +99,16 @@ def test_recipe_camera_size_reaches_every_stage_and_bad_sizes_are_refused(capsys
         with pytest.raises(SystemExit):
             ex.parse(["--camera-size", bad])
         assert why in capsys.readouterr().err
+
+
+def test_recipe_demo_counts_are_one_per_task(capsys):
+    import pytest
+
+    ex = _example()
+    assert ex.parse(["--demos", "70,45"]).demos == (70, 45) and ex.parse([]).demos == (60, 40)
+    assert ex.parse(["--quick", "--demos", "2"]).demos == (2,)
+    for bad, why in (("70", "one count >= 1 per task (PickApple, OpenDrawer)"), ("70,0", "got 70,0"),
+                     ("a,b", "give whole numbers")):
+        with pytest.raises(SystemExit):
+            ex.parse(["--demos", bad])
+        assert why in capsys.readouterr().err
