@@ -225,7 +225,7 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--engine", choices=["physx", "mujoco"], default="physx", help="what makes the data")
     ap.add_argument("--noise", type=float, default=2e-4, help="sensor noise std, rad")
-    ap.add_argument("--out", default="outputs/bench_sysid.json")
+    ap.add_argument("--out", default="outputs/bench_sysid.json", help="results JSON file (not a folder)")
     ap.add_argument("--sweep", action="store_true", help="the hidden-effect sweep (8 effects x 3 seeds + none)")
     ap.add_argument("--jobs", type=int, default=None, help="--sweep: parallel cases (default: all cores)")
     ap.add_argument("--seeds", default="0,1,2", help="--sweep: comma-separated seeds")
@@ -240,6 +240,8 @@ def main() -> int:
     ap.add_argument("--friction-laws", action="store_true",
                     help="torque-space fits of friction combinations on frictionloss / Gaz / LuGre plants")
     args = ap.parse_args()
+    if Path(args.out).is_dir():  # checked before hours of fitting, not when the results are written
+        ap.error(f"--out {args.out} is a folder; give the results file, e.g. --out {Path(args.out) / 'bench_sysid.json'}")
     if args.friction_laws:
         return run_friction_laws(args)
     if args.sweep:
