@@ -240,8 +240,12 @@ def main() -> int:
     ap.add_argument("--friction-laws", action="store_true",
                     help="torque-space fits of friction combinations on frictionloss / Gaz / LuGre plants")
     args = ap.parse_args()
-    if Path(args.out).is_dir():  # checked before hours of fitting, not when the results are written
-        ap.error(f"--out {args.out} is a folder; give the results file, e.g. --out {Path(args.out) / 'bench_sysid.json'}")
+    from realm_ms.validate import InputError, check_output_path
+
+    try:  # checked before hours of fitting, not when the results are written
+        check_output_path(args.out, "--out", "file", example="bench_sysid.json")
+    except InputError as e:
+        ap.error(str(e))
     if args.friction_laws:
         return run_friction_laws(args)
     if args.sweep:

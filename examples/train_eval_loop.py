@@ -81,6 +81,12 @@ class Recipe:
     # data-loader processes for lerobot-train; None: 0 on CPU (the cores train), most cores on a GPU
     loader_workers: int | None = None
 
+    def __post_init__(self):
+        # main() pairs tasks with counts: a count missing for a task would drop the task unseen
+        if len(self.demos) != len(self.tasks) or min(self.demos, default=0) < 1:
+            raise ValueError(f"demos: one count >= 1 per task ({', '.join(map(short, self.tasks))}); "
+                             f"got {','.join(map(str, self.demos))}")
+
     def dataloader_workers(self) -> int:
         if self.loader_workers is not None:
             return self.loader_workers
@@ -408,19 +414,18 @@ def parse(argv=None) -> Recipe:
     except UserError as e:
         ap.error(str(e))
     if a.demos is not None:
-        tasks = (Recipe.quick() if a.quick else Recipe()).tasks
         try:
             a.demos = tuple(int(x) for x in a.demos.split(","))
         except ValueError:
             ap.error(f"--demos {a.demos!r}: give whole numbers separated by commas, e.g. 60,40")
-        if len(a.demos) != len(tasks) or min(a.demos) < 1:
-            ap.error(f"--demos needs one count >= 1 per task ({', '.join(map(short, tasks))}); "
-                     f"got {','.join(map(str, a.demos))}")
     kw = {k: v for k, v in (("out", a.out), ("device", a.device), ("threads", a.threads), ("steps", a.steps),
                             ("workers", a.workers), ("batch_size", a.batch_size),
                             ("loader_workers", a.loader_workers), ("width", a.width), ("demos", a.demos),
                             ("height", a.height)) if v is not None}
-    return Recipe.quick(**kw) if a.quick else Recipe(**kw)
+    try:
+        return Recipe.quick(**kw) if a.quick else Recipe(**kw)
+    except ValueError as e:  # the recipe's own check (one demo count per task)
+        ap.error(f"--{e}")
 
 
 def main(argv=None) -> int:
