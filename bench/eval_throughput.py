@@ -135,6 +135,9 @@ def main(argv=None) -> int:
     ap.add_argument("--size", default="320x180")
     ap.add_argument("--out", default="outputs/bench/eval_throughput.json")
     args = ap.parse_args(argv)
+    from realm_ms.validate import output_arg
+
+    output_arg(ap, args.out, example="eval_throughput.json")
     w, h = (int(v) for v in args.size.split("x"))
     ns = [int(v) for v in args.workers.split(",")]
     cores = os.cpu_count()

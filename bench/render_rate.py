@@ -59,6 +59,9 @@ def main() -> None:
     args = p.parse_args()
 
     from realm_ms.rendering import resolve_denoiser, rt_samples_per_pixel
+    from realm_ms.validate import output_arg
+
+    output_arg(p, args.out, example="render_rate.json")
 
     warnings.filterwarnings("ignore", message=".*(env.unwrapped|precision lowered).*")
     den = resolve_denoiser(args.denoiser)

@@ -32,6 +32,9 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="*", default=None, help="perturbation rows to run (the plain baseline always runs)")
     ap.add_argument("--out", default="outputs/reset_cost.json")
     args = ap.parse_args(argv)
+    from realm_ms.validate import output_arg
+
+    output_arg(ap, args.out, example="reset_cost.json")
 
     import gymnasium as gym
     from tqdm import tqdm

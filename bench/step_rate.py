@@ -80,6 +80,9 @@ def main() -> None:
     p.add_argument("--gpu-envs", default="64,256,1024")
     p.add_argument("--out", type=Path, default=Path("outputs/bench/step_rate.json"))
     args = p.parse_args()
+    from realm_ms.validate import output_arg
+
+    output_arg(p, args.out, example="step_rate.json")
 
     rows = []
     for mode in args.modes.split(","):

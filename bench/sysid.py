@@ -130,7 +130,8 @@ def run_native_sweep(args) -> int:
 
 
 FRICTION_LAWS = ("frictionloss", "gaz", "lugre")
-FRICTION_FITS = ("coulomb_friction", "coulomb_friction,viscous_damping", "stribeck_friction,viscous_damping")
+FRICTION_FITS = ("coulomb_friction", "coulomb_friction,viscous_damping", "stribeck_friction,viscous_damping",
+                 "smooth_friction,viscous_damping", "lugre_friction,viscous_damping")
 
 
 def run_friction_laws(args) -> int:
@@ -240,12 +241,9 @@ def main() -> int:
     ap.add_argument("--friction-laws", action="store_true",
                     help="torque-space fits of friction combinations on frictionloss / Gaz / LuGre plants")
     args = ap.parse_args()
-    from realm_ms.validate import InputError, check_output_path
+    from realm_ms.validate import output_arg
 
-    try:  # checked before hours of fitting, not when the results are written
-        check_output_path(args.out, "--out", "file", example="bench_sysid.json")
-    except InputError as e:
-        ap.error(str(e))
+    output_arg(ap, args.out, example="bench_sysid.json")  # before hours of fitting, not when writing
     if args.friction_laws:
         return run_friction_laws(args)
     if args.sweep:

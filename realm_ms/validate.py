@@ -104,6 +104,15 @@ def check_port(value: Any, where: str) -> int:
         raise InputError(f"{e} (a TCP port is 1..65535)") from None
 
 
+def output_arg(parser, path: str | os.PathLike, flag: str = "--out", example: str | None = None) -> Path:
+    """``check_output_path`` for a command-line file argument, before the run: a bad path ends the
+    command with argparse's usage line and the reason (exit status 2), not a traceback hours later."""
+    try:
+        return check_output_path(path, flag, "file", example=example)
+    except InputError as e:
+        parser.error(str(e))
+
+
 def check_output_path(path: str | os.PathLike, where: str, kind: str = "file", example: str | None = None) -> Path:
     """An output path that can be written, checked before any work: ``kind="file"`` (not an
     existing directory) or ``kind="dir"`` (not an existing file); a path below a file, or in a

@@ -7,9 +7,9 @@ import torch
 from realm_ms.agents.effects import CONFOUNDS, EFFECTS, make_effect
 from realm_ms.sysid.effect_spec import parse_effects
 
-NAMES = ["coulomb_friction", "viscous_damping", "stribeck_friction", "smooth_friction", "armature", "payload",
-         "gravity_comp_error", "latency", "gain_mismatch", "torque_limit", "backlash", "encoder_bias", "link_mass"]
-UNITS = {"N·m", "N·m·s/rad", "kg·m²", "kg", "m", "s", "rad", "rad/s", "N·m/s", "1"}
+NAMES = ["coulomb_friction", "viscous_damping", "stribeck_friction", "smooth_friction", "lugre_friction", "armature",
+         "payload", "gravity_comp_error", "latency", "gain_mismatch", "torque_limit", "backlash", "encoder_bias", "link_mass"]
+UNITS = {"N·m", "N·m·s/rad", "kg·m²", "kg", "m", "s", "rad", "rad/s", "N·m/s", "N·m/rad", "1"}
 
 
 def test_registry_has_exactly_the_issue_names():
@@ -132,8 +132,11 @@ def test_payload_sags_and_gravity_comp_keeps_nominal_model(sim, commands, nomina
     assert np.abs(sag[:, -1, [1, 3]] - q0[:, [1, 3]]).max() > 2e-3
 
 
-def test_benchmark_stage_interface():
-    """Effects are ActuationStages the lead's DroidArmDriver runs unchanged."""
+@pytest.mark.parametrize("integrator", ["exact", "explicit", "implicit_damping"])
+def test_benchmark_stage_interface(integrator):
+    """Effects are ActuationStages the benchmark's DroidArmDriver runs unchanged, with every
+    integrator (the explicit ones give the friction steps no within-step plant: their per-joint
+    fallback runs)."""
     from realm_ms.agents.actuation import ActuationModel
     from realm_ms.agents.control import DroidArmDriver, DroidControlConfig
     from realm_ms.sysid.simulator import ReplaySimulator
@@ -146,7 +149,8 @@ def test_benchmark_stage_interface():
     stages = [make_effect(n) for n in NAMES]
     for s in stages:
         s.set_values({p.local_key: p.spec.nominal for p in s.free_params})
-    drv = DroidArmDriver(arm, DroidControlConfig(joint_physics="none"), 2, "cpu", ActuationModel(stages))
+    drv = DroidArmDriver(arm, DroidControlConfig(joint_physics="none", integrator=integrator), 2, "cpu",
+                         ActuationModel(stages))
     q = torch.tensor([[0.0, -0.6, 0.0, -2.4, 0.0, 1.9, 0.0]] * 2)
     drv.reset(q)
     drv.set_target(q + 0.1)

@@ -77,17 +77,20 @@ def test_auto_start_spec_falls_back_to_the_bare_name():
     assert _start_spec("latency", {"delay": 9.0}) == "latency"  # outside the bounds: start from off
 
 
-@pytest.mark.parametrize("coulomb_after", [0.53e-3, 0.3e-3])
-def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeypatch, coulomb_after):
+@pytest.mark.parametrize("coulomb_after,lugre_after", [(0.53e-3, 0.6e-3), (0.3e-3, 0.6e-3), (0.53e-3, 0.35e-3)])
+def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeypatch, coulomb_after, lugre_after):
     """The screening ranks Coulomb first and cannot tell smooth friction from it: both are fitted in
     full and the one with the lower held-out error is kept; a suspect that is no look-alike waits
-    for the next round. A top suspect that reaches the floor (1.5 x 0.27 mrad) ends the round."""
+    for the next round. A top suspect that reaches the floor (1.5 x 0.27 mrad) ends the round. When
+    none of the screened look-alikes does, LuGre friction (a look-alike the screening leaves out)
+    is fitted last."""
     from types import SimpleNamespace
 
     from realm_ms.agents.robot_model import RobotModel
     from realm_ms.sysid import auto as auto_mod
 
-    held_after = {"coulomb_friction": coulomb_after, "smooth_friction": 0.47e-3, "latency": 0.52e-3}
+    held_after = {"coulomb_friction": coulomb_after, "smooth_friction": 0.47e-3, "latency": 0.52e-3,
+                  "lugre_friction": lugre_after}
     rounds = []
 
     def diagnose(train, held, model, cfg, evaluator, log):
@@ -112,7 +115,12 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeyp
     if coulomb_after < 0.4e-3:
         assert fitted == ["coulomb_friction"] and [s["effect"] for s in out["steps"]] == ["coulomb_friction"]
         return
-    assert fitted == ["coulomb_friction", "smooth_friction"]
+    assert fitted == ["coulomb_friction", "smooth_friction", "lugre_friction"]
+    if lugre_after < 0.4e-3:
+        assert [s["effect"] for s in out["steps"]] == ["lugre_friction"]
+        assert out["final"]["heldout_rmse"] == pytest.approx(0.35e-3) and out["final"]["verdict"] == "at_floor"
+        return
     assert [s["effect"] for s in out["steps"]] == ["smooth_friction"]
     assert out["final"]["heldout_rmse"] == pytest.approx(0.47e-3)
-    assert out["details"]["rejected"] == [{"effect": "coulomb_friction", "heldout_rmse": 0.53e-3}]
+    assert out["details"]["rejected"] == [{"effect": "coulomb_friction", "heldout_rmse": 0.53e-3},
+                                          {"effect": "lugre_friction", "heldout_rmse": 0.6e-3}]

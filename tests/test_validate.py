@@ -70,3 +70,18 @@ def test_argparse_types_name_the_flag(capsys):
         with pytest.raises(SystemExit) as e:
             p.parse_args(argv)
         assert e.value.code == 2 and msg in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("script", ["eval_throughput", "render_rate", "reset_cost", "step_rate", "sysid"])
+def test_bench_scripts_refuse_a_folder_as_out_before_they_run(tmp_path, script):
+    """Every bench script that writes a JSON ``--out`` checks it first (exit 2, one line), instead
+    of failing when it writes, after its measurements."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    r = subprocess.run([sys.executable, str(root / "bench" / f"{script}.py"), "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
+    assert f"--out: {tmp_path} is a directory; give a file path" in r.stderr

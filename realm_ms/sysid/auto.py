@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.robot_model import RobotModel
-from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose, judging_floor
+from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, diagnose, judging_floor
 from realm_ms.sysid.fit import FitConfig, fit
 from realm_ms.sysid.timeseries import Trajectory
 
@@ -55,13 +55,22 @@ class AutoStep:
         return {"effect": self.effect, "params": self.params, "heldout_rmse": self.heldout_rmse}
 
 
-def contenders(cands: list) -> list:
+def contenders(cands: list, screened: tuple[str, ...] = (), tried: set[str] = frozenset()) -> list:
     """The top suspect and the look-alikes the diagnosis could not tell from it (``confounded_with``,
     among the remaining candidates): its screening ranks them on a short re-tune, so each is fitted
     in full and the data decide (on MuJoCo's ``frictionloss`` the screening ranks Coulomb first, and
-    the full fits give smooth friction 0.47 mrad against Coulomb's 0.53)."""
+    the full fits give smooth friction 0.47 mrad against Coulomb's 0.53). Last, the top suspect's
+    look-alikes the screening leaves out (not in ``screened``: LuGre friction, too costly to screen),
+    from their typical values; the caller stops at the first contender that reaches the floor."""
+    from realm_ms.agents.effects import confounded_with
+
     top = cands[0]
-    return [top] + [c for c in cands[1:] if c.effect in top.confounded_with]
+    out = [top] + [c for c in cands[1:] if c.effect in top.confounded_with]
+    for name in confounded_with(top.effect):
+        if name not in screened and name not in tried and all(c.effect != name for c in out):
+            out.append(Suspect(name, 0.0, float("nan"), float("nan"), {},
+                               f"a look-alike of {top.effect} that diagnose does not screen"))
+    return out
 
 
 def _start_spec(effect: str, params: dict[str, float]) -> str:
@@ -94,8 +103,12 @@ def friction_curve(model: RobotModel, qd: np.ndarray = FRICTION_QD) -> dict:
             self.qd, self.dt = v, 1.0
 
     for fx in model.effects:
-        if isinstance(fx, ImplicitJointTorque):
-            with torch.inference_mode():
+        if not isinstance(fx, ImplicitJointTorque):
+            continue
+        with torch.inference_mode():
+            if hasattr(fx, "sliding_friction"):  # a law with state: its own steady state
+                tau += fx.sliding_friction(v).to(tau.dtype)
+            else:
                 tau -= fx.friction_torque(v, torch.full_like(v, 1e12), _State(), None).to(tau.dtype)
     return {"qd": [round(float(x), 6) for x in qd], "tau": [[round(float(x), 6) for x in row] for row in tau.numpy()]}
 
@@ -125,7 +138,7 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
             log("auto: no remaining suspect helps")
             break
         fitted = []
-        for sus in contenders(cands)[: cfg.max_fits - fits]:
+        for sus in contenders(cands, cfg.diagnose.candidates, tried)[: cfg.max_fits - fits]:
             tried.add(sus.effect)
             fits += 1
             bar.set_description(f"auto: fitting {sus.effect}")

@@ -153,6 +153,13 @@ def _smooth(f, fx, v, size):
             f"{_j(j)}, slow/fast {f.slow_fast[j]:.1f}) → smooth friction without stiction, {size}")
 
 
+def _lugre(f, fx, v, size):
+    j = _top(f.corr_sign, f)
+    return (f"residual flips sign with velocity (corr {f.corr_sign[j]:+.2f} with sign(q̇) on {_j(j)}) and is largest "
+            f"at low speed (slow/fast {f.slow_fast[j]:.1f}), with a springy give at reversals → LuGre friction "
+            f"(pre-sliding + Stribeck), {size}")
+
+
 def _armature(f, fx, v, size):
     j = _top(f.corr_acc, f)
     return (f"residual follows acceleration (corr {f.corr_acc[j]:+.2f} with q̈ on {_j(j)}) and vanishes in holds "
@@ -207,6 +214,7 @@ SENTENCES: dict[str, Callable] = {
     "viscous_damping": _viscous,
     "stribeck_friction": _stribeck,
     "smooth_friction": _smooth,
+    "lugre_friction": _lugre,
     "armature": _armature,
     "payload": _payload,
     "gravity_comp_error": _gravity,

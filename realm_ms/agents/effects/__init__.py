@@ -25,6 +25,7 @@ from realm_ms.agents.effects.gain_mismatch import GainMismatch
 from realm_ms.agents.effects.gravity_comp_error import GravityCompError
 from realm_ms.agents.effects.latency import Latency
 from realm_ms.agents.effects.link_mass import LinkMass
+from realm_ms.agents.effects.lugre_friction import LuGreFriction
 from realm_ms.agents.effects.payload import Payload
 from realm_ms.agents.effects.smooth_friction import SmoothFriction
 from realm_ms.agents.effects.stribeck_friction import StribeckFriction
@@ -34,8 +35,8 @@ from realm_ms.registry import Registry
 
 EFFECTS: Registry[type[Effect]] = Registry("effect")
 
-for _cls in (CoulombFriction, ViscousDamping, StribeckFriction, SmoothFriction, Armature, Payload, GravityCompError,
-             Latency, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass):
+for _cls in (CoulombFriction, ViscousDamping, StribeckFriction, SmoothFriction, LuGreFriction, Armature, Payload,
+             GravityCompError, Latency, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass):
     EFFECTS.register(_cls.name, _cls)
 
 #: pairs the position data of one gain setting cannot always separate; diagnosis reports both
@@ -44,6 +45,9 @@ CONFOUNDS: list[tuple[str, str]] = [
     ("payload", "gravity_comp_error"),
     ("coulomb_friction", "stribeck_friction"),
     ("coulomb_friction", "smooth_friction"),
+    ("coulomb_friction", "lugre_friction"),
+    ("smooth_friction", "lugre_friction"),
+    ("stribeck_friction", "lugre_friction"),
     ("backlash", "encoder_bias"),
     ("latency", "torque_limit"),
     ("armature", "gain_mismatch"),

@@ -156,7 +156,10 @@ class Effect(ActuationStage):
         items = []
         for p in self.free_params:
             v = values.get(p.local_key, p.spec.off)
-            rel = abs(v - p.spec.off) / max(abs(p.spec.nominal - p.spec.off), 1e-12)
+            # shape parameters whose off-value is their typical value (a Stribeck velocity) count
+            # relative to that value, so they do not crowd out the strengths
+            scale = abs(p.spec.nominal - p.spec.off) or abs(p.spec.nominal)
+            rel = abs(v - p.spec.off) / max(scale, 1e-12)
             where = f" on joint {p.joint + 1}" if p.joint is not None else ""
             items.append((rel, f"{p.spec.name} ≈ {format_value(v, p.unit)}{where}"))
         items.sort(key=lambda t: -t[0])

@@ -21,7 +21,7 @@ import torch
 
 from realm_ms.sysid.timeseries import Trajectory
 from realm_ms.sysid.torque.smoothing import SmoothingConfig, noise_floor, smooth
-from realm_ms.sysid.torque.terms import EXTRA_SPECS, TERMS, TRACKING_ONLY, Samples
+from realm_ms.sysid.torque.terms import EXTRA_SPECS, TERMS, TRACKING_ONLY, Samples, Series
 
 UNIT = "N·m"
 
@@ -40,7 +40,7 @@ class TorqueSet:
     @classmethod
     def build(cls, trajs: list[Trajectory], arm, smoothing: SmoothingConfig = SmoothingConfig(),
               max_samples: int | None = None) -> "TorqueSet":
-        parts, noise_var, weights, dts = [], [], [], []
+        parts, noise_var, weights, dts, series = [], [], [], [], []
         for tr in trajs:
             if tr.tau is None:
                 raise ValueError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
@@ -52,19 +52,20 @@ class TorqueSet:
             if sl.stop - sl.start < 10:
                 raise ValueError(f"{tr.name}: too short for torque space ({len(tr.t)} samples)")
             parts.append((sm.q[sl], sm.qd[sl], sm.qdd[sl], sm.tau[sl]))
+            series.append(Series(torch.as_tensor(sm.qd, dtype=torch.float64), dt, sl))
             qt = torch.as_tensor(sm.q[sl][:: max(1, (sl.stop - sl.start) // 200)], dtype=torch.float64)
             with torch.inference_mode():
                 msq = (arm.mass_matrix(qt) ** 2).mean(0).numpy()
             noise_var.append(noise_floor(sm, msq) ** 2)
             weights.append(sl.stop - sl.start)
         q, v, a, tau = (np.concatenate([p[i] for p in parts]) for i in range(4))
-        lengths = list(weights)
+        lengths, idx = list(weights), None
         if max_samples and len(q) > max_samples:  # evenly thinned: the fit needs coverage, not every ms
             idx = np.linspace(0, len(q) - 1, max_samples).astype(int)
             q, v, a, tau = q[idx], v[idx], a[idx], tau[idx]
             lengths = []  # thinned: no longer contiguous time series
         t64 = lambda x: torch.as_tensor(x, dtype=torch.float64)  # noqa: E731
-        s = Samples(t64(q), t64(v), t64(a), arm)
+        s = Samples(t64(q), t64(v), t64(a), arm, series=series, index=None if idx is None else torch.as_tensor(idx))
         with torch.inference_mode():
             nominal = arm.rnea(s.q, s.qd, s.qdd).numpy()
         noise = np.sqrt(np.average(np.array(noise_var), axis=0, weights=weights))

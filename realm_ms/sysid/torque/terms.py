@@ -11,6 +11,8 @@ the motors must *add* (friction has the sign of q̇, as in Gaz et al. 2019).
 | coulomb_friction | (fc + fc_asym tanh(q̇/v_d)) tanh(q̇/eps) |
 | viscous_damping | b q̇ |
 | stribeck_friction | fs (r + (1 - r) exp(-(q̇/vs)²)) tanh(q̇/eps) |
+| smooth_friction | fc (tanh((q̇ + v0)/vs) − tanh(v0/vs)) |
+| lugre_friction | σ₀ z + σ₁ ż, the bristle z integrated along each trajectory's measured q̇ (stateful) |
 | armature | ia q̈ |
 | payload | Y_7(q, q̇, q̈) π_p: the standard parameters π_p of the payload (mass, CoM, inertia) on body 7 |
 | gravity_comp_error | scale g_model(q) (the model's gravity is off by ``scale``) |
@@ -39,13 +41,27 @@ TRACKING_ONLY = ("latency", "gain_mismatch", "torque_limit", "backlash", "encode
 
 
 @dataclass
+class Series:
+    """One trajectory's whole (smoothed) velocity, for terms with a state along time (LuGre's
+    bristle): ``scored`` is the slice of it that the samples hold."""
+
+    qd: torch.Tensor  # (T, 7)
+    dt: float
+    scored: slice
+
+
+@dataclass
 class Samples:
-    """Torque-space samples, float64 torch tensors (N, 7) and the arm model."""
+    """Torque-space samples, float64 torch tensors (N, 7) and the arm model; ``series`` (the
+    trajectories the samples were scored from, in order) and ``index`` (the samples kept when the
+    scored set was thinned, None: all) for stateful terms."""
 
     q: torch.Tensor
     qd: torch.Tensor
     qdd: torch.Tensor
     arm: object
+    series: list[Series] | None = None
+    index: torch.Tensor | None = None
     _cache: dict | None = None
 
     def cached(self, key: str, fn: Callable[[], torch.Tensor]) -> torch.Tensor:
@@ -84,6 +100,42 @@ def smooth(values, s, config):
     from realm_ms.agents.effects.smooth_friction import friction
 
     return friction(s.qd, _vec(values, "fc"), _vec(values, "vs", 0.1), _vec(values, "v0"))
+
+
+def linear_recurrence(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """x_k = a_k x_(k-1) + b_k with x_(-1) = 0 along dim 0, by a parallel prefix scan (log2(T)
+    vectorised passes instead of T Python steps); stable for 0 <= a <= 1."""
+    a, b = a.clone(), b.clone()
+    d = 1
+    while d < len(a):
+        b[d:] = a[d:] * b[:-d] + b[d:]  # right-hand sides are evaluated before the assignment
+        a[d:] = a[d:] * a[:-d]
+        d *= 2
+    return b
+
+
+def lugre(values, s, config):
+    """σ₀ z + σ₁ ż with the bristle z integrated along each whole trajectory from z = 0, each
+    sample interval advanced exactly with its end velocity held (``lugre_friction.py``); ż is the
+    interval's mean. Needs the samples' time series (``Samples.series``)."""
+    from realm_ms.agents.effects.lugre_friction import bristle_terms, mean_torque
+
+    if s.series is None:
+        raise ValueError("lugre_friction needs contiguous time series (its bristle state follows the velocity history)")
+    fc = _vec(values, "fc")
+    if not bool((fc > 0).any()):
+        return torch.zeros_like(s.q)
+    fs, vs = fc * values.get("fs_ratio", 1.5), values.get("vs", 0.05)
+    s0, s1 = values.get("sigma0", 1000.0), values.get("sigma1", 1.0)
+    out = []
+    for tr in s.series:
+        z_ss, decay, _, _ = bristle_terms(tr.qd, tr.dt, fc, fs, vs, s0)
+        z = linear_recurrence(decay, (1 - decay) * z_ss)
+        z = torch.where(fc > 0, z, torch.zeros_like(z))
+        z_prev = torch.cat([torch.zeros_like(z[:1]), z[:-1]])
+        out.append(mean_torque(z_prev, z, tr.dt, s0, s1)[tr.scored])
+    f = torch.cat(out)
+    return f if s.index is None else f[s.index]
 
 
 def armature(values, s, config):
@@ -134,6 +186,7 @@ def link_mass(values, s, config):
 #: effect name -> torque-space term
 TERMS: dict[str, Callable] = {
     "coulomb_friction": coulomb, "viscous_damping": viscous, "stribeck_friction": stribeck, "smooth_friction": smooth,
+    "lugre_friction": lugre,
     "armature": armature, "payload": payload, "gravity_comp_error": gravity_error, "link_mass": link_mass,
 }
 
