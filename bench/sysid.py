@@ -131,7 +131,7 @@ def run_native_sweep(args) -> int:
 
 FRICTION_LAWS = ("frictionloss", "gaz", "lugre")
 FRICTION_FITS = ("coulomb_friction", "coulomb_friction,viscous_damping", "stribeck_friction,viscous_damping",
-                 "smooth_friction,viscous_damping", "lugre_friction,viscous_damping")
+                 "smooth_friction,viscous_damping", "lugre_friction")
 
 
 def run_friction_laws(args) -> int:

@@ -1,22 +1,24 @@
 """LuGre friction (Canudas de Wit et al. 1995), per joint: a bristle deflection z with
 
-    ż = q̇ − σ₀ |q̇| z / g(q̇),   g(q̇) = fc + (fs − fc) exp(−(q̇/vs)²),   τ_f = σ₀ z + σ₁ ż.
+    ż = q̇ − σ₀ |q̇| z / g(q̇),   g(q̇) = fc + (fs − fc) exp(−(q̇/vs)²),   τ_f = σ₀ z + σ₁ ż + σ₂ q̇.
 
 Steady sliding gives the Stribeck curve g(q̇) sign(q̇); what the velocity-only laws miss is
 *pre-sliding*: after a reversal, or in a hold under a load below fs, the joint sits on a spring of
 stiffness σ₀ (damped by σ₁) and moves by up to fs/σ₀ before it slides. A position log shows it
-at every reversal. The viscous part of the original law (σ₂ q̇) is ``viscous_damping``.
+at every reversal. The viscous part σ₂ q̇ belongs to the law: the whole law is one effect, so
+it is fitted in one step (without it, a fit of the bristle part alone must bend it to the missing
+viscous slope first).
 
 z over a step of length h with the velocity v held is advanced exactly (an exponential approach
 to its steady state g sign(v)/σ₀), so the stiff bristle is stable at any σ₀:
 
-    z'(v) = z_ss + (z − z_ss) exp(−σ₀ |v| h / g(v)),   τ_f(v) = σ₀ z' + σ₁ (z' − z)/h,
+    z'(v) = z_ss + (z − z_ss) exp(−σ₀ |v| h / g(v)),   τ_f(v) = σ₀ z' + σ₁ (z' − z)/h + σ₂ v,
 
 where τ_f is the step's mean friction (σ₁ times the mean ż). With ``ImplicitJointTorque`` the end
 velocity v solves the backward-Euler equation M (v − v_free)/h + τ_f(v) = 0, coupled through the
 arm's mass matrix M: Newton steps from v_free with τ_f's exact slope, each kept only where it lowers
 the residual (τ_f is not monotone in v: the Stribeck dip). τ_f is nearly linear in v while the
-bristle holds (slope σ₀ h + σ₁, below M/h), so the steps converge fast where it matters most.
+bristle holds (slope σ₀ h + σ₁ + σ₂, below M/h), so the steps converge fast where it matters most.
 """
 
 from __future__ import annotations
@@ -49,9 +51,9 @@ def bristle_step(z: torch.Tensor, v: torch.Tensor, h: float | torch.Tensor, fc, 
     return torch.where(fc > 0, z_ss + (z - z_ss) * decay, torch.zeros_like(z))
 
 
-def mean_torque(z: torch.Tensor, z_new: torch.Tensor, h, sigma0, sigma1) -> torch.Tensor:
-    """τ_f over a step from z to z_new: σ₀ z_new + σ₁ (mean ż)."""
-    return sigma0 * z_new + sigma1 * (z_new - z) / h
+def mean_torque(z: torch.Tensor, z_new: torch.Tensor, v: torch.Tensor, h, sigma0, sigma1, sigma2) -> torch.Tensor:
+    """τ_f over a step from z to z_new ending at velocity v: σ₀ z_new + σ₁ (mean ż) + σ₂ v."""
+    return sigma0 * z_new + sigma1 * (z_new - z) / h + sigma2 * v
 
 
 class LuGreFriction(ImplicitJointTorque):
@@ -80,6 +82,7 @@ class LuGreFriction(ImplicitJointTorque):
                       doc="bristle stiffness: pre-sliding reaches fs/σ₀ before the joint slides"),
             ParamSpec("sigma1", "N·m·s/rad", 1.0, 0.0, 10.0, 1.0, per_joint=False,
                       doc="bristle damping (the micro-damping of pre-sliding)"),
+            ParamSpec("sigma2", "N·m·s/rad", 0.1, 0.0, 5.0, 0.0, doc="viscous friction"),
         ]
 
     # ------------------------------------------------------------------ state
@@ -103,22 +106,22 @@ class LuGreFriction(ImplicitJointTorque):
     def _params(self, like, rows):
         fc = self.p("fc", like, rows).to(like.dtype).expand_as(like)
         fs = fc * self.p("fs_ratio", like, rows).to(like.dtype)
-        vs, s0, s1 = (self.p(k, like, rows).to(like.dtype).expand_as(like) for k in ("vs", "sigma0", "sigma1"))
-        return fc, fs, vs, s0, s1
+        vs, s0, s1, s2 = (self.p(k, like, rows).to(like.dtype).expand_as(like) for k in ("vs", "sigma0", "sigma1", "sigma2"))
+        return fc, fs, vs, s0, s1, s2
 
     # ------------------------------------------------------------------ the step
     def _torque(self, v, z, h, par, slope: bool = False):
         """(τ_f(v), z'(v)) over the step, and dτ_f/dv if ``slope``."""
-        fc, fs, vs, s0, s1 = par
+        fc, fs, vs, s0, s1, s2 = par
         z_ss, decay, g, bump = bristle_terms(v, h, fc, fs, vs, s0)
         z_new = torch.where(fc > 0, z_ss + (z - z_ss) * decay, torch.zeros_like(z))
-        tau = mean_torque(z, z_new, h, s0, s1)
+        tau = mean_torque(z, z_new, v, h, s0, s1, s2)
         if not slope:
             return tau, z_new
         sign, dg = torch.sign(v), -2.0 * v / (vs * vs) * bump
         # d z'/dv = z_ss' (1 − E) + (z − z_ss) E d(−σ₀|v|h/g)/dv
         dz = sign * dg / s0 * (1 - decay) - (z - z_ss) * decay * s0 * h * (sign * g - torch.abs(v) * dg) / (g * g)
-        return tau, z_new, torch.where(fc > 0, (s0 + s1 / h) * dz, torch.zeros_like(dz))
+        return tau, z_new, torch.where(fc > 0, (s0 + s1 / h) * dz, torch.zeros_like(dz)) + s2
 
     def _solve(self, v, v_free, m_h, z, h, par):
         """Newton steps on m_h (v − v_free) + τ_f(v) = 0 from v (m_h: M/h, or the diagonal I/h
@@ -161,9 +164,9 @@ class LuGreFriction(ImplicitJointTorque):
         return -tau
 
     def sliding_friction(self, v: torch.Tensor) -> torch.Tensor:
-        """The torque that keeps each joint sliding at v once the bristle has settled: g(v) sign(v)."""
-        fc, fs, vs, _, _ = self._params(v, None)
-        return sliding_level(v, fc, fs, vs) * torch.sign(v)
+        """The torque that keeps each joint sliding at v once the bristle has settled: g(v) sign(v) + σ₂ v."""
+        fc, fs, vs, _, _, s2 = self._params(v, None)
+        return sliding_level(v, fc, fs, vs) * torch.sign(v) + s2 * v
 
     def evidence(self, values, features):
         return features.sentence_for(self, values)

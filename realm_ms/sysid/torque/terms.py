@@ -12,7 +12,7 @@ the motors must *add* (friction has the sign of q̇, as in Gaz et al. 2019).
 | viscous_damping | b q̇ |
 | stribeck_friction | fs (r + (1 - r) exp(-(q̇/vs)²)) tanh(q̇/eps) |
 | smooth_friction | fc (tanh((q̇ + v0)/vs) − tanh(v0/vs)) |
-| lugre_friction | σ₀ z + σ₁ ż, the bristle z integrated along each trajectory's measured q̇ (stateful) |
+| lugre_friction | σ₀ z + σ₁ ż + σ₂ q̇, the bristle z integrated along each trajectory's measured q̇ (stateful) |
 | armature | ia q̈ |
 | payload | Y_7(q, q̇, q̈) π_p: the standard parameters π_p of the payload (mass, CoM, inertia) on body 7 |
 | gravity_comp_error | scale g_model(q) (the model's gravity is off by ``scale``) |
@@ -115,16 +115,16 @@ def linear_recurrence(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
 
 
 def lugre(values, s, config):
-    """σ₀ z + σ₁ ż with the bristle z integrated along each whole trajectory from z = 0, each
+    """σ₀ z + σ₁ ż + σ₂ q̇ with the bristle z integrated along each whole trajectory from z = 0, each
     sample interval advanced exactly with its end velocity held (``lugre_friction.py``); ż is the
     interval's mean. Needs the samples' time series (``Samples.series``)."""
     from realm_ms.agents.effects.lugre_friction import bristle_terms, mean_torque
 
     if s.series is None:
         raise ValueError("lugre_friction needs contiguous time series (its bristle state follows the velocity history)")
-    fc = _vec(values, "fc")
+    fc, s2 = _vec(values, "fc"), _vec(values, "sigma2")
     if not bool((fc > 0).any()):
-        return torch.zeros_like(s.q)
+        return s2 * s.qd
     fs, vs = fc * values.get("fs_ratio", 1.5), values.get("vs", 0.05)
     s0, s1 = values.get("sigma0", 1000.0), values.get("sigma1", 1.0)
     out = []
@@ -133,7 +133,7 @@ def lugre(values, s, config):
         z = linear_recurrence(decay, (1 - decay) * z_ss)
         z = torch.where(fc > 0, z, torch.zeros_like(z))
         z_prev = torch.cat([torch.zeros_like(z[:1]), z[:-1]])
-        out.append(mean_torque(z_prev, z, tr.dt, s0, s1)[tr.scored])
+        out.append(mean_torque(z_prev, z, tr.qd, tr.dt, s0, s1, s2)[tr.scored])
     f = torch.cat(out)
     return f if s.index is None else f[s.index]
 
