@@ -55,7 +55,7 @@ class AutoStep:
         return {"effect": self.effect, "params": self.params, "heldout_rmse": self.heldout_rmse}
 
 
-def contenders(cands: list, screened: tuple[str, ...] = (), tried: set[str] = frozenset()) -> list:
+def contenders(cands: list, screened: tuple[str, ...], tried: set[str]) -> list:
     """The top suspect and the look-alikes the diagnosis could not tell from it (``confounded_with``,
     among the remaining candidates): its screening ranks them on a short re-tune, so each is fitted
     in full and the data decide (on MuJoCo's ``frictionloss`` the screening ranks Coulomb first, and
@@ -97,19 +97,10 @@ def friction_curve(model: RobotModel, qd: np.ndarray = FRICTION_QD) -> dict:
 
     v = torch.as_tensor(np.repeat(qd[:, None], 7, 1), dtype=torch.float32)
     tau = torch.zeros_like(v)
-
-    class _State:  # the friction laws read qd and dt; a huge inertia means "no stick within dt"
-        def __init__(self):
-            self.qd, self.dt = v, 1.0
-
     for fx in model.effects:
-        if not isinstance(fx, ImplicitJointTorque):
-            continue
-        with torch.inference_mode():
-            if hasattr(fx, "sliding_friction"):  # a law with state: its own steady state
+        if isinstance(fx, ImplicitJointTorque):
+            with torch.inference_mode():
                 tau += fx.sliding_friction(v).to(tau.dtype)
-            else:
-                tau -= fx.friction_torque(v, torch.full_like(v, 1e12), _State(), None).to(tau.dtype)
     return {"qd": [round(float(x), 6) for x in qd], "tau": [[round(float(x), 6) for x in row] for row in tau.numpy()]}
 
 

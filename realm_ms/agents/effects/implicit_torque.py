@@ -3,6 +3,8 @@ viscous friction): stable at 120 Hz on the light wrist joints where an explicit 
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import torch
 
 from realm_ms.agents.actuation import ControlState
@@ -141,3 +143,10 @@ class ImplicitJointTorque(Effect):
 
     def friction_torque(self, v_free, inertia, state, rows) -> torch.Tensor:
         raise NotImplementedError
+
+    def sliding_friction(self, v: torch.Tensor) -> torch.Tensor:
+        """The torque that keeps each joint sliding at v (same sign as v): the per-joint step with a
+        huge inertia over 1 s, so nothing sticks within it. Laws with state override it with their
+        settled state."""
+        state = SimpleNamespace(qd=v, dt=1.0)  # what the memoryless laws read
+        return -self.friction_torque(v, torch.full_like(v, 1e12), state, None)
