@@ -45,10 +45,15 @@ def bristle_terms(v, h, fc, fs, vs, sigma0):
     return torch.sign(v) * g / sigma0, torch.exp(-sigma0 * torch.abs(v) * h / g), g, bump
 
 
-def bristle_step(z: torch.Tensor, v: torch.Tensor, h: float | torch.Tensor, fc, fs, vs, sigma0) -> torch.Tensor:
-    """z after h with v held (exact; joints with fc = 0 keep z = 0)."""
-    z_ss, decay, _, _ = bristle_terms(v, h, fc, fs, vs, sigma0)
+def advance(z, z_ss, decay, fc):
+    """z after the step: its exponential approach to z_ss (joints with fc = 0 keep z = 0)."""
     return torch.where(fc > 0, z_ss + (z - z_ss) * decay, torch.zeros_like(z))
+
+
+def bristle_step(z: torch.Tensor, v: torch.Tensor, h: float | torch.Tensor, fc, fs, vs, sigma0) -> torch.Tensor:
+    """z after h with v held (exact)."""
+    z_ss, decay, _, _ = bristle_terms(v, h, fc, fs, vs, sigma0)
+    return advance(z, z_ss, decay, fc)
 
 
 def mean_torque(z: torch.Tensor, z_new: torch.Tensor, v: torch.Tensor, h, sigma0, sigma1, sigma2) -> torch.Tensor:
@@ -114,7 +119,7 @@ class LuGreFriction(ImplicitJointTorque):
         """(τ_f(v), z'(v)) over the step, and dτ_f/dv if ``slope``."""
         fc, fs, vs, s0, s1, s2 = par
         z_ss, decay, g, bump = bristle_terms(v, h, fc, fs, vs, s0)
-        z_new = torch.where(fc > 0, z_ss + (z - z_ss) * decay, torch.zeros_like(z))
+        z_new = advance(z, z_ss, decay, fc)
         tau = mean_torque(z, z_new, v, h, s0, s1, s2)
         if not slope:
             return tau, z_new
@@ -142,19 +147,9 @@ class LuGreFriction(ImplicitJointTorque):
             v, r, slope = torch.where(better, v_try, v), torch.where(better, r_try, r), torch.where(better, slope_try, slope)
         return v
 
-    def coupled_torque(self, state, rows, qd, mass, net):
-        """Newton steps on the whole vector M (v − v_free)/h + τ_f(v) = 0 from v_free (the joints
-        are coupled through M)."""
-        h = state.dt
-        z = self._state(state, rows).to(qd.dtype)
-        par = self._params(qd, rows)
-        v_free = qd + h * torch.linalg.solve(mass, net)
-        v = self._solve(v_free, v_free, mass / h, z, h, par)
-        tau, z_new = self._torque(v, z, h, par)
-        self._commit(state, rows, z_new)
-        return -tau
-
-    def friction_torque(self, v_free, inertia, state, rows):
+    def _step(self, state, rows, v_free, inertia):
+        """The friction torque of this tick (and the bristle advanced) for the end velocity that
+        solves inertia (v − v_free)/h + τ_f(v) = 0."""
         h = state.dt
         z = self._state(state, rows).to(v_free.dtype)
         par = self._params(v_free, rows)
@@ -162,6 +157,14 @@ class LuGreFriction(ImplicitJointTorque):
         tau, z_new = self._torque(v, z, h, par)
         self._commit(state, rows, z_new)
         return -tau
+
+    def coupled_torque(self, state, rows, qd, mass, net):
+        """Newton steps on the whole vector M (v − v_free)/h + τ_f(v) = 0 from v_free (the joints
+        are coupled through M)."""
+        return self._step(state, rows, qd + state.dt * torch.linalg.solve(mass, net), mass)
+
+    def friction_torque(self, v_free, inertia, state, rows):
+        return self._step(state, rows, v_free, inertia)
 
     def sliding_friction(self, v: torch.Tensor) -> torch.Tensor:
         """The torque that keeps each joint sliding at v once the bristle has settled: g(v) sign(v) + σ₂ v."""
