@@ -128,9 +128,10 @@ class LuGreFriction(ImplicitJointTorque):
         dz = sign * dg / s0 * (1 - decay) - (z - z_ss) * decay * s0 * h * (sign * g - torch.abs(v) * dg) / (g * g)
         return tau, z_new, torch.where(fc > 0, (s0 + s1 / h) * dz, torch.zeros_like(dz)) + s2
 
-    def _solve(self, v, v_free, m_h, z, h, par):
-        """Newton steps on m_h (v − v_free) + τ_f(v) = 0 from v (m_h: M/h, or the diagonal I/h
+    def _solve(self, v_free, m_h, z, h, par):
+        """Newton steps on m_h (v − v_free) + τ_f(v) = 0 from v_free (m_h: M/h, or the diagonal I/h
         as a (B, 7) tensor for the per-joint form), each kept only where it lowers the residual."""
+        v = v_free
         diagonal = m_h.dim() == v.dim()
 
         def residual(x):
@@ -153,7 +154,7 @@ class LuGreFriction(ImplicitJointTorque):
         h = state.dt
         z = self._state(state, rows).to(v_free.dtype)
         par = self._params(v_free, rows)
-        v = self._solve(v_free, v_free, inertia / h, z, h, par)
+        v = self._solve(v_free, inertia / h, z, h, par)
         tau, z_new = self._torque(v, z, h, par)
         self._commit(state, rows, z_new)
         return -tau
