@@ -47,11 +47,11 @@ def ev():
     e.close()
 
 
-def run_case(tmp_path, ev, hidden: str, seed: int, rate: float, small: bool):
+def run_case(tmp_path, ev, hidden: str, seed: int, rate: float, small: bool, log=lambda *a: None):
     size = dict(n_train=3, n_heldout=2, duration_s=6.0) if small else dict(n_train=7, n_heldout=3, duration_s=10.0)
     info = synth(hidden, tmp_path, SynthConfig(seed=seed, noise_rad=NOISE, rate_hz=rate, **size), evaluator=ev)
     train, held = load_split(tmp_path)
-    d = diagnose(train, held, evaluator=ev, log=lambda *a: None)
+    d = diagnose(train, held, evaluator=ev, log=log)
     return info, train, held, d
 
 
@@ -88,8 +88,16 @@ def check_fit(info, train, held, d, ev, names: list[str], strong: bool = True):
 # ---------------------------------------------------------------------------- fast (make test)
 @pytest.mark.parametrize("name, rate", [("latency", 15.0), ("coulomb_friction", 100.0)])
 def test_hidden_effect_fast(tmp_path, ev, name, rate):
-    info, train, held, d = run_case(tmp_path, ev, HIDDEN[name], seed=0, rate=rate, small=True)
+    logs = []
+    info, train, held, d = run_case(tmp_path, ev, HIDDEN[name], seed=0, rate=rate, small=True, log=logs.append)
     check_rank(d, [name])
+    # the effects inert at their off-values (payload CoM, Stribeck and smooth shapes) are screened
+    # again from typical strengths exactly when no first-pass candidate already reaches the floor
+    rescreened = [m for m in logs if m.startswith("re-screening")]
+    skipped = [m for m in logs if m.startswith("not re-screening")]
+    assert len(rescreened) + len(skipped) == 1, logs
+    if skipped:
+        assert d.verdict == "found" and f": {d.suspects[0].effect} already" in skipped[0], (skipped, d.message)
     check_fit(info, train, held, d, ev, [name])
 
 

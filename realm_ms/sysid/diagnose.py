@@ -7,7 +7,9 @@ Full CMA-ES per candidate is too slow for a few minutes on 2 cores, so the diagn
 2. for every candidate effect not in the model: secant sensitivities of the simulated train
    trajectories w.r.t. each of its parameters (all effects x parameters in one batch), one
    Levenberg-Marquardt solve per effect, a 2-point line search (``optimize.linearized_step``);
-   a second iteration for the ``refine`` best.
+   a second iteration for the ``refine`` best. Effects whose parameters do nothing at their
+   off-values (a payload's centre of mass at zero mass) are screened once more from typical
+   strengths, unless a first-pass candidate already reaches the floor.
 3. score = relative reduction of the *held-out* RMSE when the effect is added with its screened
    parameters, simulated (not linearised). Suspects best first.
 4. confounds (``effects.CONFOUNDS``): when two documented look-alikes both explain the held-out
@@ -165,6 +167,16 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     inert = {i: _own_insensitive(g, st) for i, (g, st) in enumerate(zip(groups, steps))}
     redo = [i for i, keys in inert.items() if keys]
     if redo:
+        # a first-pass candidate already at the floor leaves the others nothing to win but a tie
+        he_first = [st["scores"][1][0][0] if st["improved"] else np.inf for st in steps]
+        i0 = int(np.argmin(he_first))
+        if np.isfinite(he_first[i0]):
+            at = judging_floor(min(floor, _floor_with(ev, he_ss, fixed, groups[i0])[0]), cfg.replay_floor_rad)
+            if np.sqrt(he_first[i0]) <= cfg.found_factor * at:
+                log(f"not re-screening {', '.join(names[i] for i in redo)} from typical strengths: {names[i0]} already "
+                    f"brings the held-out RMSE to {np.sqrt(he_first[i0]):.2e} rad, within {cfg.found_factor:g}x the floor {at:.2e} rad")
+                redo = []
+    if redo:
         log("re-screening " + ", ".join(f"{names[i]} (at its off-values {', '.join(inert[i])} change nothing)" for i in redo)
             + " from typical strengths")
         alts = [typical_start(groups[i], {p.key for p in groups[i].effects[0].free_params}) for i in redo]
@@ -188,10 +200,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     # the baseline's and the best screened candidate's held-out residual
     best_i = int(np.argmin(he_rmse)) if len(he_rmse) else None
     if best_i is not None and he_rmse[best_i] < base_he_rmse:
-        g_best = groups[best_i]
-        (hb,) = evaluate_groups(ev, [he_ss], fixed, [g_best], [g_best.u[None]])
-        res_b = np.where(he_ss.mask[..., None], he_ss.meas - hb[0][2][0], np.nan)
-        f2, f2_j = noise_floor(he_ss, res_b)
+        f2, f2_j = _floor_with(ev, he_ss, fixed, groups[best_i])
         if f2 < floor:
             floor, floor_j = f2, f2_j
 
@@ -271,6 +280,12 @@ def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg:
     return "unexplained", (f"unexplained: no effect in the library explains the residual (held-out RMSE {f(base)}, "
                            f"{ratio:.1f}x the floor {f(floor)}); share of the model error each candidate explains: "
                            f"{shares}. A structural mismatch (plant, controller or data) is likely"), floor
+
+
+def _floor_with(ev, he_ss: SegmentSet, fixed: list, group: Group) -> tuple[float, np.ndarray]:
+    """The noise floor (overall, per joint) estimated from the held-out residual of the model with ``group``."""
+    (hb,) = evaluate_groups(ev, [he_ss], fixed, [group], [group.u[None]])
+    return noise_floor(he_ss, np.where(he_ss.mask[..., None], he_ss.meas - hb[0][2][0], np.nan))
 
 
 def _own_insensitive(group: Group, step: dict) -> list[str]:

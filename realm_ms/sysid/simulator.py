@@ -11,8 +11,11 @@ resolution, and the simulated positions are sampled at the data timestamps (line
 between physics steps, so any logging rate works). Arms not needed by a call are put to sleep
 (PhysX skips them), so the pool only grows.
 
-Where time goes (2-core CPU, 500 arms): PhysX step ~60 %, per-articulation get/set ~15 %, torch
-(driver + stages) ~25 %; see ``bench/sysid.py --profile``.
+Where time goes (2-core CPU, one process): a nominal rollout of 300 arms spends ~45 % in the PhysX
+step, ~10 % in per-articulation get/set and ~45 % in torch (the driver's plan and exact step); a
+diagnosis's screening batches ~90 % in torch, mostly the friction laws evaluated at every 1 kHz tick
+inside the step, each on the few rows where it is active: their cost is per-op overhead, not
+arithmetic. ``StepProfile`` keeps the split.
 """
 
 from __future__ import annotations

@@ -122,9 +122,19 @@ class Effect(ActuationStage):
         """Values of one spec, (B, 7) or (B, 1), on ``like``'s device (only ``rows`` if given)."""
         if like is not None and self.theta.device != like.device:
             self.theta = self.theta.to(like.device)
+        # the within-step laws read their values at every tick of every step: slice and gather once
+        # per theta (the rows come from ``active_rows``, one tensor per theta)
+        cache = self.__dict__.get("_p_cache")
+        if cache is None or cache[0] is not self.theta or len(cache[1]) > 64:
+            cache = self._p_cache = (self.theta, {})
+        key = (name, id(rows))
+        hit = cache[1].get(key)
+        if hit is not None and hit[0] is rows:
+            return hit[1]
         v = self.theta[:, self._slices[name]]
         if rows is not None:
             v = v[rows]
+        cache[1][key] = (rows, v)
         return v
 
     def is_off(self) -> bool:

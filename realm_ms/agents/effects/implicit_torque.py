@@ -89,7 +89,13 @@ class ImplicitJointTorque(Effect):
             return None
         b = state.q.shape[0]
         mass, minv, ext = (x.expand(b, *x.shape[1:]) if x.shape[0] != b else x for x in plant)
-        net = tau - model_bias(state) + ext
+        # every within-step effect of this tick reads the same net torque: computed once per tick
+        cached = state.extra.get("_plant_net")
+        if cached is not None and cached[0] is tau:
+            net = cached[1]
+        else:
+            net = tau - model_bias(state) + ext
+            state.extra["_plant_net"] = (tau, net)
         if rows is not None:
             mass, minv, net = mass[rows], minv[rows], net[rows]
         return mass, minv, net
@@ -127,18 +133,21 @@ class ImplicitJointTorque(Effect):
             qd = state.qd if rows is None else state.qd[rows]
             plant = self.plant(state, rows)
             if plant is None:
-                mass = self.mass_matrix(state, rows)
-                net = (tau if rows is None else tau[rows]) - model_bias(state, rows)
+                mass, minv = self.mass_matrix(state, rows).to(qd.dtype), None
+                net = ((tau if rows is None else tau[rows]) - model_bias(state, rows)).to(qd.dtype)
+                v_free = qd + state.dt * torch.linalg.solve(mass, net)
             else:
-                mass, _, net = plant
-            return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass.to(qd.dtype), net.to(qd.dtype)))
+                mass, minv, net = (x.to(qd.dtype) for x in plant)
+                v_free = qd + state.dt * (minv @ net.unsqueeze(-1)).squeeze(-1)
+            return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass, net, v_free, minv))
         # no motor torque this tick, or a per-joint effect: the per-joint form
         v_free, inertia = self.free_velocity(state, rows)
         return scatter_rows(state.q, rows, self.friction_torque(v_free, inertia, state, rows))
 
-    def coupled_torque(self, state, rows, qd, mass, net) -> torch.Tensor:
-        """The effect's torque on ``rows`` from a step coupled through M (at the segment's reset):
-        q̇, M and the net torque τ_motor − b(q, q̇) on those rows."""
+    def coupled_torque(self, state, rows, qd, mass, net, v_free, minv) -> torch.Tensor:
+        """The effect's torque on ``rows`` from a step coupled through M: q̇, M, the net torque
+        τ_motor − b(q, q̇), the free end velocity v_free = q̇ + h M⁻¹ net on those rows, and M⁻¹
+        where the driver handed over its plant (None: M is the nominal arm's at the segment's reset)."""
         raise NotImplementedError
 
     def friction_torque(self, v_free, inertia, state, rows) -> torch.Tensor:

@@ -159,10 +159,10 @@ class LuGreFriction(ImplicitJointTorque):
         self._commit(state, rows, z_new)
         return -tau
 
-    def coupled_torque(self, state, rows, qd, mass, net):
+    def coupled_torque(self, state, rows, qd, mass, net, v_free, minv):
         """Newton steps on the whole vector M (v − v_free)/h + τ_f(v) = 0 from v_free (the joints
         are coupled through M)."""
-        return self._step(state, rows, qd + state.dt * torch.linalg.solve(mass, net), mass)
+        return self._step(state, rows, v_free, mass)
 
     def friction_torque(self, v_free, inertia, state, rows):
         return self._step(state, rows, v_free, inertia)
