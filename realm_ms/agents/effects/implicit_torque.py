@@ -107,9 +107,7 @@ class ImplicitJointTorque(Effect):
         plant = self.plant(state, rows)
         if plant is not None:
             _, minv, net = plant
-            minv, net = minv.to(qd.dtype), net.to(qd.dtype)
-            inertia = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
-            return qd + state.dt * (minv @ net.unsqueeze(-1)).squeeze(-1), inertia
+            return self._free_from_plant(qd, minv.to(qd.dtype), net.to(qd.dtype), state.dt)
         inertia = self._joint_inertia(state)
         if rows is not None:
             inertia = inertia[rows]
@@ -120,6 +118,10 @@ class ImplicitJointTorque(Effect):
             tau = tau[rows]
         net = tau - model_bias(state, rows)
         return qd + state.dt * net / inertia, inertia
+
+    def _free_from_plant(self, qd, minv, net, dt: float) -> tuple[torch.Tensor, torch.Tensor]:
+        """(v_free = q̇ + h M⁻¹ net, I_j = SAFETY / (M⁻¹)_jj) on the driver's plant."""
+        return qd + dt * (minv @ net.unsqueeze(-1)).squeeze(-1), self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
 
     #: the effect has a backward-Euler step coupled through the whole mass matrix (``coupled_torque``)
     coupled = False
@@ -133,21 +135,22 @@ class ImplicitJointTorque(Effect):
             qd = state.qd if rows is None else state.qd[rows]
             plant = self.plant(state, rows)
             if plant is None:
-                mass, minv = self.mass_matrix(state, rows).to(qd.dtype), None
+                mass, inertia = self.mass_matrix(state, rows).to(qd.dtype), None
                 net = ((tau if rows is None else tau[rows]) - model_bias(state, rows)).to(qd.dtype)
                 v_free = qd + state.dt * torch.linalg.solve(mass, net)
             else:
                 mass, minv, net = (x.to(qd.dtype) for x in plant)
-                v_free = qd + state.dt * (minv @ net.unsqueeze(-1)).squeeze(-1)
-            return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass, net, v_free, minv))
+                v_free, inertia = self._free_from_plant(qd, minv, net, state.dt)
+            return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass, net, v_free, inertia))
         # no motor torque this tick, or a per-joint effect: the per-joint form
         v_free, inertia = self.free_velocity(state, rows)
         return scatter_rows(state.q, rows, self.friction_torque(v_free, inertia, state, rows))
 
-    def coupled_torque(self, state, rows, qd, mass, net, v_free, minv) -> torch.Tensor:
+    def coupled_torque(self, state, rows, qd, mass, net, v_free, inertia) -> torch.Tensor:
         """The effect's torque on ``rows`` from a step coupled through M: q̇, M, the net torque
-        τ_motor − b(q, q̇), the free end velocity v_free = q̇ + h M⁻¹ net on those rows, and M⁻¹
-        where the driver handed over its plant (None: M is the nominal arm's at the segment's reset)."""
+        τ_motor − b(q, q̇), the free end velocity v_free = q̇ + h M⁻¹ net on those rows, and the
+        apparent inertia I_j of ``free_velocity`` where the driver handed over its plant (None: M is
+        the nominal arm's at the segment's reset)."""
         raise NotImplementedError
 
     def friction_torque(self, v_free, inertia, state, rows) -> torch.Tensor:

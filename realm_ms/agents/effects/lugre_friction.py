@@ -159,7 +159,7 @@ class LuGreFriction(ImplicitJointTorque):
         self._commit(state, rows, z_new)
         return -tau
 
-    def coupled_torque(self, state, rows, qd, mass, net, v_free, minv):
+    def coupled_torque(self, state, rows, qd, mass, net, v_free, inertia):
         """Newton steps on the whole vector M (v − v_free)/h + τ_f(v) = 0 from v_free (the joints
         are coupled through M)."""
         return self._step(state, rows, v_free, mass)

@@ -86,16 +86,16 @@ class SmoothFriction(ImplicitJointTorque):
 
     coupled = True
 
-    def coupled_torque(self, state, rows, qd, mass, net, v_free, minv):
+    def coupled_torque(self, state, rows, qd, mass, net, v_free, inertia):
         """Backward Euler with the arm's mass matrix M (at the segment's reset, as viscous damping):
         v' solves M (v' − v_free)/h + τ(v') = 0, v_free = q̇ + h M⁻¹(τ_motor − b(q, q̇)). Near rest
         this friction is a steep viscous slope, and the joints are coupled through M: the per-joint
         solution is the start of COUPLED_NEWTON_STEPS Newton steps on the whole vector (the
         residual is the gradient of a strictly convex function, so the root is unique)."""
-        if minv is None:  # the per-joint step's own start (I_j cached at the reset)
+        if inertia is None:  # the per-joint step's own start (I_j cached at the reset)
             v_start, inertia = self.free_velocity(state, rows)
         else:
-            v_start, inertia = v_free, self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
+            v_start = v_free
         fc, vs, v0 = (self.p(k, qd, rows).to(qd.dtype).expand_as(qd) for k in ("fc", "vs", "v0"))
         v = backward_euler_velocity(v_start, inertia / state.dt, fc, vs, v0, COUPLED_START_STEPS)
         m_h, c = mass / state.dt, torch.tanh(v0 / vs)

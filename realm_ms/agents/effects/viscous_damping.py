@@ -20,7 +20,7 @@ class ViscousDamping(ImplicitJointTorque):
 
     coupled = True
 
-    def coupled_torque(self, state, rows, qd, mass, net, v_free, minv):
+    def coupled_torque(self, state, rows, qd, mass, net, v_free, inertia):
         """Backward Euler with the arm's mass matrix M (at the segment's reset configuration):
         (M + h B) v' = M q̇ + h (τ_motor - b(q, q̇)), torque -B v'. The joints are coupled through
         M, so damping one joint also slows its neighbours; a per-joint apparent inertia misses that
