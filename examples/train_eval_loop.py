@@ -213,7 +213,7 @@ def train(r: Recipe, dataset: Path, run: Path, steps: int, init: Path | None = N
             f"--policy.optimizer_lr_backbone={r.lr}", f"--steps={steps}", f"--batch_size={r.batch_size}",
             f"--num_workers={r.dataloader_workers()}", f"--save_freq={save_freq or r.save_freq}", f"--log_freq={r.log_freq}", f"--output_dir={run}",
             "--wandb.enable=false"]
-    cmd = [sys.executable, "-m", "lerobot.scripts.lerobot_train"] + cmd
+    cmd = [sys.executable, "-m", "realm_ms.lerobot.train"] + cmd  # lerobot-train, frames decoded once
     with open(log, "a") as f, tqdm(total=steps, initial=done, desc=f"lerobot-train {run.name}", unit="step") as bar:
         f.write(f"# {' '.join(cmd)}\n# start step {done}\n")
         f.flush()
