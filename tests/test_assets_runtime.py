@@ -156,7 +156,9 @@ def test_real_mesh_objects_dropped_on_table_come_to_rest(tmp_path):
     meshes.huge_scale(user / "mug")
     (user / "toy").mkdir()
     meshes.concave(user / "toy")
-    cfg = BuildConfig(coacd=CoacdSettings(budget_s=8, mcts_iterations=20), thumbnails=False, stable_poses=False)
+    # a budget CoACD meets on a loaded machine too: a decomposition cut by its budget falls back to one
+    # convex hull, and ManiSkill's bottle as one hull rolls on (what this test checks is settling, not the budget)
+    cfg = BuildConfig(coacd=CoacdSettings(budget_s=120, mcts_iterations=20), thumbnails=False, stable_poses=False)
     rep = build_catalog([str(user), "maniskill", "libero", "rgb_objects", "pybullet", "ycb"], tmp_path / "cat", cfg, progress=False,
                         limit_per_source=2, strict=False)
     assert rep.failed == 0 and rep.built >= 3
