@@ -102,12 +102,12 @@ def test_tolerance_and_nearest_frame(dataset_root):
     try:
         stamps, frames = frame_cache._FRAMES[str(path)]
         t = float(stamps[3])
-        got = frame_cache.decode_video_frames(path, [t + 0.01, t - 0.01], 0.02, return_uint8=True)
+        got = frame_cache.frames_at(path, [t + 0.01, t - 0.01], 0.02, return_uint8=True)
         assert torch.equal(got, frames[[3, 3]])
         mid = (float(stamps[3]) + float(stamps[4])) / 2  # a tie goes to the earlier frame, as LeRobot's argmin
-        assert torch.equal(frame_cache.decode_video_frames(path, [mid], 0.1, return_uint8=True), frames[[3]])
+        assert torch.equal(frame_cache.frames_at(path, [mid], 0.1, return_uint8=True), frames[[3]])
         with pytest.raises(FrameTimestampError, match="no frame within"):
-            frame_cache.decode_video_frames(path, [t + 0.03], 0.02)
+            frame_cache.frames_at(path, [t + 0.03], 0.02)
     finally:
         frame_cache.clear()
 

@@ -4,10 +4,10 @@ LeRobot's PyAV path answers every sample by opening the camera's video file, see
 and decoding forward, once per camera: on a training set of short, small-frame episodes that is most
 of the data loader's work (``bench/train_loader.py`` measures it). :func:`preload` decodes each video
 file of a dataset once, in the training process before the data loader forks its workers (they share
-those pages), and :func:`decode_video_frames` then answers LeRobot's timestamp queries from memory:
-the same frames LeRobot's decoder returns, chosen by the same nearest-timestamp rule and refused
-beyond the same tolerance. Files whose decoded frames would not fit ``budget_bytes`` stay with
-LeRobot's decoder, as do depth videos.
+those pages), and :func:`query_videos` then answers LeRobot's timestamp queries from memory
+(:func:`frames_at`): the same frames LeRobot's decoder returns, chosen by the same nearest-timestamp
+rule and refused beyond the same tolerance. A dataset whose decoded frames would not fit
+``budget_bytes`` stays with LeRobot's decoder, as do depth videos.
 """
 
 from __future__ import annotations
@@ -43,10 +43,14 @@ def decode_file(path: Path | str) -> tuple[torch.Tensor, torch.Tensor]:
     return torch.tensor(stamps, dtype=torch.float64), torch.from_numpy(np.stack(frames)).permute(0, 3, 1, 2).contiguous()
 
 
+def rgb_keys(meta) -> list[str]:
+    return [k for k in meta.video_keys if k not in getattr(meta, "depth_keys", ())]
+
+
 def video_files(dataset) -> list[Path]:
     """The RGB video files behind a LeRobotDataset (each once, in episode order)."""
     meta = dataset.meta
-    rgb = [k for k in meta.video_keys if k not in getattr(meta, "depth_keys", ())]
+    rgb = rgb_keys(meta)
     episodes = dataset.episodes if dataset.episodes is not None else range(meta.total_episodes)
     files = {dataset.root / meta.get_video_file_path(ep, key): None for ep in episodes for key in rgb}
     return list(files)
@@ -61,7 +65,7 @@ def preload(dataset, budget: int | None = None, threads: int | None = None) -> i
     frames (estimated from the dataset's own frame count and image shapes) would pass ``budget``."""
     budget = budget_bytes() if budget is None else budget
     meta = dataset.meta
-    keys = [k for k in meta.video_keys if k not in getattr(meta, "depth_keys", ())]
+    keys = rgb_keys(meta)
     need = sum(meta.total_frames * int(np.prod(meta.features[k]["shape"])) for k in keys)
     if not keys or need > budget:
         return 0
@@ -83,15 +87,10 @@ def nearest(stamps: torch.Tensor, query: torch.Tensor) -> torch.Tensor:
     return torch.where((query - stamps[left]).abs() <= (stamps[right] - query).abs(), left, right)
 
 
-def decode_video_frames(video_path, timestamps, tolerance_s, backend=None, return_uint8=False, is_depth=False):
-    """LeRobot's ``decode_video_frames``, from memory for preloaded files."""
-    entry = None if is_depth else _FRAMES.get(str(video_path))
-    if entry is None:
-        from lerobot.datasets import video_utils
-
-        return video_utils.decode_video_frames(video_path, timestamps, tolerance_s, backend,
-                                               return_uint8=return_uint8, is_depth=is_depth)
-    stamps, frames = entry
+def frames_at(video_path, timestamps, tolerance_s, return_uint8=False) -> torch.Tensor:
+    """The preloaded frames nearest ``timestamps``, as LeRobot's decoder returns them (uint8, or float32
+    in [0, 1]); FrameTimestampError beyond ``tolerance_s``."""
+    stamps, frames = _FRAMES[str(video_path)]
     query = torch.tensor(timestamps, dtype=torch.float64)
     idx = nearest(stamps, query)
     off = (stamps[idx] - query).abs()
@@ -114,8 +113,8 @@ def query_videos(reader, query_timestamps: dict[str, list[float]], ep_idx: int) 
         if path not in _FRAMES or key in reader._meta.depth_keys:
             return _lerobot_query_videos(reader, query_timestamps, ep_idx)
         start = ep[f"videos/{key}/from_timestamp"]
-        out[key] = decode_video_frames(path, [start + t for t in stamps], reader._tolerance_s,
-                                       return_uint8=reader._return_uint8).squeeze(0)
+        out[key] = frames_at(path, [start + t for t in stamps], reader._tolerance_s,
+                             return_uint8=reader._return_uint8).squeeze(0)
     return out
 
 
