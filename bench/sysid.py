@@ -71,10 +71,10 @@ def run_auto(args, data: Path, space: str) -> dict:
     wall = time.perf_counter() - t0
     r = {"mode": f"auto ({space} space)", "hidden": args.hidden, "wall_s": wall, "unit": a["unit"],
          "nominal": a["nominal_heldout_rmse"], "steps": [(s["effect"], s["heldout_rmse"]) for s in a["steps"]],
-         "final": a["final"], "cpu_count": os.cpu_count(), "load": os.getloadavg()}
+         "final": a["final"], "workers": args.workers, "cpu_count": os.cpu_count(), "load": os.getloadavg()}
     chain = " -> ".join([f"{r['nominal']:.3g}"] + [f"+{e} {v:.3g}" for e, v in r["steps"]])
     print(f"auto ({space}): {chain} {a['unit']}; final {a['final']['verdict']} (noise floor "
-          f"{a['final']['noise_floor']:.3g}); {wall:.0f} s wall, load {r['load'][0]:.1f}; goal < 300 s: "
+          f"{a['final']['noise_floor']:.3g}); {wall:.0f} s wall, {args.workers} worker(s), load {r['load'][0]:.1f}; goal < 300 s: "
           f"{'met' if wall < 300 else 'NOT met'}")
     return r
 
@@ -221,7 +221,9 @@ def run_sweep(args) -> int:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hidden", default="coulomb_friction:fc=0.3")
-    ap.add_argument("--workers", type=int, default=int(os.environ.get("REALM_SYSID_WORKERS", 1)))
+    ap.add_argument("--workers", type=int, default=None,
+                    help="CPU worker processes (default: what `realm sysid` uses, $REALM_SYSID_WORKERS or min(2, "
+                         "cores); the sweeps run one per case, --jobs cases side by side)")
     ap.add_argument("--device", choices=["cpu", "cuda", "both"], default="both")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--engine", choices=["physx", "mujoco"], default="physx", help="what makes the data")
@@ -241,6 +243,10 @@ def main() -> int:
     ap.add_argument("--friction-laws", action="store_true",
                     help="torque-space fits of friction combinations on frictionloss / Gaz / LuGre plants")
     args = ap.parse_args()
+    if args.workers is None:  # the timings measure what a user's `realm sysid` runs; a sweep case gets one core
+        from realm_ms.sysid.engine import default_workers
+
+        args.workers = 1 if (args.sweep or args.native_sweep or args.friction_laws) else default_workers()
     from realm_ms.validate import output_arg
 
     output_arg(ap, args.out, example="bench_sysid.json")  # before hours of fitting, not when writing

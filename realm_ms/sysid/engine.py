@@ -54,6 +54,11 @@ def _worker_run(args):
     return _WORKER_SIM.rollout(q0, qd0, cmd, _effects_from_specs(specs))
 
 
+def default_workers() -> int:
+    """CPU worker processes when none are asked for: ``REALM_SYSID_WORKERS``, else min(2, cores)."""
+    return int(os.environ.get("REALM_SYSID_WORKERS", min(2, os.cpu_count() or 1)))
+
+
 def make_simulator(config: SimConfig | None = None, device: str | None = None):
     """CPU simulator (``simulator.py``), or the GPU one when ``device`` is ``cuda`` (``gpu.py``)."""
     if device and device.startswith("cuda"):
@@ -88,7 +93,7 @@ class Evaluator:
             except ImportError:  # pragma: no cover
                 device = "cpu"
         if workers is None:
-            workers = int(os.environ.get("REALM_SYSID_WORKERS", min(2, os.cpu_count() or 1)))
+            workers = default_workers()
         return cls(config, workers, device)
 
     @property
