@@ -223,7 +223,7 @@ def main() -> int:
     ap.add_argument("--hidden", default="coulomb_friction:fc=0.3")
     ap.add_argument("--workers", type=int, default=None,
                     help="CPU worker processes (default: what `realm sysid` uses, $REALM_SYSID_WORKERS or min(2, "
-                         "cores); the sweeps run one per case, --jobs cases side by side)")
+                         "cores); the sweeps run $REALM_SYSID_WORKERS or one per case, --jobs cases side by side)")
     ap.add_argument("--device", choices=["cpu", "cuda", "both"], default="both")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--engine", choices=["physx", "mujoco"], default="physx", help="what makes the data")
@@ -246,7 +246,8 @@ def main() -> int:
     if args.workers is None:  # the timings measure what a user's `realm sysid` runs; a sweep case gets one core
         from realm_ms.sysid.engine import default_workers
 
-        args.workers = 1 if (args.sweep or args.native_sweep or args.friction_laws) else default_workers()
+        sweeping = args.sweep or args.native_sweep or args.friction_laws
+        args.workers = int(os.environ.get("REALM_SYSID_WORKERS", 1)) if sweeping else default_workers()
     from realm_ms.validate import output_arg
 
     output_arg(ap, args.out, example="bench_sysid.json")  # before hours of fitting, not when writing
