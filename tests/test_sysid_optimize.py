@@ -74,3 +74,34 @@ def test_a_zero_mass_payload_reports_its_centre_of_mass_as_insensitive_and_resta
     assert g.effects[0].values()["mass"] == 0.0 and alt.effects[0] is not g.effects[0]  # a copy
     out = linearized_step(ev, ss, [], [alt], first=True, block=True)[0]
     assert not {"com_x", "com_y", "com_z"} & {alt.params.params[k].local_key for k in out["insensitive"]}
+
+
+def test_train_and_heldout_run_as_one_rollout_with_the_scores_of_separate_ones(tmp_path):
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.sysid.data_io import load_dir
+    from realm_ms.sysid.engine import Evaluator
+    from realm_ms.sysid.optimize import Group, evaluate_groups
+    from realm_ms.sysid.replay import SegmentSet
+    from realm_ms.sysid.synth import SynthConfig, synth
+
+    class Counting(Evaluator):
+        calls = 0
+
+        def simulate(self, segset, effects, n_candidates=1):
+            Counting.calls += 1
+            return super().simulate(segset, effects, n_candidates)
+
+    ev = Counting(workers=1, device="cpu")
+    synth("viscous_damping:b=0.8", tmp_path, SynthConfig(seed=3, noise_rad=1e-4, n_train=2, n_heldout=1, duration_s=3), evaluator=ev)
+    tr, he = (SegmentSet.build(load_dir(tmp_path / d), 120.0) for d in ("train", "heldout"))
+    g = Group.of([make_effect("viscous_damping")])
+    pts = np.vstack([g.params.to_unit(g.params.off()), g.params.to_unit(g.params.nominal())])
+    Counting.calls = 0
+    both = evaluate_groups(ev, [tr, he], [], [g], [pts])
+    assert Counting.calls == 1
+    for ss, res in zip([tr, he], both):
+        # a fresh evaluator: the first one's cache already holds every arm
+        (alone,) = evaluate_groups(Evaluator(workers=1, device="cpu"), [ss], [], [g], [pts])
+        np.testing.assert_allclose(res[0][0], alone[0][0], rtol=1e-4)  # mse per candidate
+        np.testing.assert_allclose(res[0][2], alone[0][2], atol=1e-5)  # sampled q (float32 batch neighbours)
+        assert res[0][0][1] < 0.5 * res[0][0][0]  # damping (the hidden effect) helps on both sets

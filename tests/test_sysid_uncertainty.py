@@ -30,6 +30,12 @@ def test_fit_reports_a_95_percent_interval_containing_the_truth(tmp_path, ev):
     assert 0 < u["std"] < 0.002  # a 20 ms delay seen on every joint is pinned to ~0.1 ms
     assert lo < f.params["latency.delay"] < hi
 
+    # without intervals (as `auto` fits): the same fit, every arm of it already in the evaluator's cache
+    simulated = ev.cache.misses
+    g = fit(train, held, config=FitConfig(add="latency", generations=3, uncertainty=False), evaluator=ev,
+            progress=False, log=lambda *a: None)
+    assert g.uncertainty == {} and g.params == f.params and ev.cache.misses == simulated
+
 
 @pytest.mark.slow
 def test_report_has_leave_one_effect_out_rows(tmp_path, ev):

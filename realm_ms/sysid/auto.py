@@ -133,8 +133,10 @@ def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel |
             tried.add(sus.effect)
             fits += 1
             bar.set_description(f"auto: fitting {sus.effect}")
+            # the loop reports values and held-out errors, not intervals: no uncertainty batch
             f = fit(train, heldout, model, FitConfig(add=_start_spec(sus.effect, sus.params), generations=cfg.generations,
-                                                     popsize=cfg.popsize, seed=cfg.seed), evaluator, progress=False, log=quiet)
+                                                     popsize=cfg.popsize, seed=cfg.seed, uncertainty=False), evaluator,
+                    progress=False, log=quiet)
             bar.update(1)
             fitted.append((float(f.after["heldout_rmse_rad"]), sus, f))
             if fitted[-1][0] <= cfg.diagnose.found_factor * floor:

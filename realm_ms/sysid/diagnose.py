@@ -153,8 +153,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     empty = Group.of(copies())
     (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], fixed, [empty], [empty.u[None]])
     base_tr_rmse, base_he_rmse = float(np.sqrt(b_tr[0][0])), float(np.sqrt(b_he[0][0]))
-    res_he = np.where(he_ss.mask[..., None], he_ss.meas - b_he[2][0], np.nan)
-    floor, floor_j = noise_floor(he_ss, res_he)
+    floor, floor_j = _floor_of(he_ss, b_he[2][0])
     feats = compute(tr_ss, b_tr[2][0], gravity_at_samples(tr_ss, ev.sim.model if ev.device == "cpu" else _arm_model()))
     log(f"baseline held-out RMSE {base_he_rmse:.3e} rad")
 
@@ -171,7 +170,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
         he_first = [st["scores"][1][0][0] if st["improved"] else np.inf for st in steps]
         i0 = int(np.argmin(he_first))
         if np.isfinite(he_first[i0]):
-            at = judging_floor(min(floor, _floor_with(ev, he_ss, fixed, groups[i0])[0]), cfg.replay_floor_rad)
+            at = judging_floor(min(floor, _floor_of(he_ss, steps[i0]["scores"][1][2][0])[0]), cfg.replay_floor_rad)
             if np.sqrt(he_first[i0]) <= cfg.found_factor * at:
                 log(f"not re-screening {', '.join(names[i] for i in redo)} from typical strengths: {names[i0]} already "
                     f"brings the held-out RMSE to {np.sqrt(he_first[i0]):.2e} rad, within {cfg.found_factor:g}x the floor {at:.2e} rad")
@@ -185,6 +184,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
                 groups[i], steps[i] = g, st
     tr_mse = np.array([st["mse_after"] for st in steps])
     he_mse = np.array([st["scores"][1][0][0] if st["improved"] else b_he[0][0] for st in steps])
+    he_sim = [st["scores"][1][2][0] if st["improved"] else b_he[2][0] for st in steps]  # held-out q at each group's point
     order = np.argsort(he_mse)
     refine = [int(i) for i in order[: cfg.refine] if steps[int(i)]["improved"]]
     if refine:
@@ -193,14 +193,14 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
         steps2 = linearized_step(ev, tr_ss, fixed, sub, first=False, also=[he_ss])
         for i, st in zip(refine, steps2):
             if st["improved"]:
-                tr_mse[i], he_mse[i] = st["mse_after"], st["scores"][1][0][0]
+                tr_mse[i], he_mse[i], he_sim[i] = st["mse_after"], st["scores"][1][0][0], st["scores"][1][2][0]
     he_rmse = np.sqrt(he_mse)
 
     # noise floor: the second-difference estimate is inflated by model error, so take the smaller of
     # the baseline's and the best screened candidate's held-out residual
     best_i = int(np.argmin(he_rmse)) if len(he_rmse) else None
     if best_i is not None and he_rmse[best_i] < base_he_rmse:
-        f2, f2_j = _floor_with(ev, he_ss, fixed, groups[best_i])
+        f2, f2_j = _floor_of(he_ss, he_sim[best_i])
         if f2 < floor:
             floor, floor_j = f2, f2_j
 
@@ -282,10 +282,10 @@ def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg:
                            f"{shares}. A structural mismatch (plant, controller or data) is likely"), floor
 
 
-def _floor_with(ev, he_ss: SegmentSet, fixed: list, group: Group) -> tuple[float, np.ndarray]:
-    """The noise floor (overall, per joint) estimated from the held-out residual of the model with ``group``."""
-    (hb,) = evaluate_groups(ev, [he_ss], fixed, [group], [group.u[None]])
-    return noise_floor(he_ss, np.where(he_ss.mask[..., None], he_ss.meas - hb[0][2][0], np.nan))
+def _floor_of(he_ss: SegmentSet, sim: np.ndarray) -> tuple[float, np.ndarray]:
+    """The noise floor (overall, per joint) estimated from the held-out residual of a simulation
+    (N, L, 7) of ``he_ss`` (the one the screening step already ran at the group's point)."""
+    return noise_floor(he_ss, np.where(he_ss.mask[..., None], he_ss.meas - sim, np.nan))
 
 
 def _own_insensitive(group: Group, step: dict) -> list[str]:

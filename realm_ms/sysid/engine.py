@@ -5,12 +5,15 @@ rows, or 1 row shared by all) on every segment of ``segset`` and returns the sim
 at the data samples, candidate-major (C*N, L, 7). Large batches are cut into chunks of at most
 ``max_envs`` arms; with ``workers > 1`` the chunks go to persistent worker processes, each with its
 own PhysX scene (spawned once, reused for every call). With ``device="cuda"`` one GPU scene runs the
-whole batch (``gpu.py``).
+whole batch (``gpu.py``). Equal arms are simulated once per batch, and arms simulated before come
+from a bounded cache (``RolloutCache``).
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
+from collections import OrderedDict
 from dataclasses import asdict
 from typing import Any
 
@@ -54,6 +57,62 @@ def _worker_run(args):
     return _WORKER_SIM.rollout(q0, qd0, cmd, _effects_from_specs(specs))
 
 
+def _theta_rows(fx: Effect, rows) -> np.ndarray:
+    """The effect's parameters on arms ``rows`` (a theta of one row is shared by all arms)."""
+    th = fx.theta.cpu().numpy()
+    return th[rows] if th.shape[0] > 1 else th
+
+
+def arm_keys(q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray, effects: list[Effect]) -> list[bytes]:
+    """One digest per arm of everything its simulation depends on: start, commands, and the name,
+    configuration and parameters of each effect that is not at its off-values on that arm. An effect
+    at its off-values does nothing, so the other candidates of a screening batch do not make equal
+    arms (every candidate's unperturbed probe, the baseline) look different."""
+    per_effect = []
+    for fx in sorted(effects, key=lambda f: f.name):
+        th = fx.theta.cpu().numpy()
+        on = (th != np.array([p.spec.off for p in fx.params], dtype=th.dtype)).any(axis=1)
+        per_effect.append(((fx.name + repr(_spec(fx, th[:0])[1])).encode(), th, on))
+    keys = []
+    for i in range(q0.shape[0]):
+        h = hashlib.blake2b(digest_size=16)
+        for a in (q0[i], qd0[i], cmd[i]):
+            h.update(np.ascontiguousarray(a).tobytes())
+        for tag, th, on in per_effect:
+            r = min(i, th.shape[0] - 1)
+            if on[r]:
+                h.update(tag)
+                h.update(th[r].tobytes())
+        keys.append(h.digest())
+    return keys
+
+
+class RolloutCache:
+    """Simulated arms by ``arm_keys``, least recently used out first, at most ``max_bytes``: a fit
+    re-simulates what the diagnosis or its own last step already ran (the nominal model, the best
+    candidate, the centre of every probe batch)."""
+
+    def __init__(self, max_bytes: float = 256e6):
+        self.max_bytes = max_bytes
+        self._rows: OrderedDict[bytes, np.ndarray] = OrderedDict()
+        self._bytes = 0
+        self.hits = self.misses = 0
+
+    def get(self, key: bytes) -> np.ndarray | None:
+        row = self._rows.get(key)
+        if row is not None:
+            self._rows.move_to_end(key)
+        return row
+
+    def put(self, key: bytes, row: np.ndarray) -> None:
+        if key in self._rows or row.nbytes > self.max_bytes:
+            return
+        self._rows[key] = row = np.array(row)  # a copy: a view would keep its whole batch alive
+        self._bytes += row.nbytes
+        while self._bytes > self.max_bytes:
+            self._bytes -= self._rows.popitem(last=False)[1].nbytes
+
+
 def default_workers() -> int:
     """CPU worker processes when none are asked for: ``REALM_SYSID_WORKERS``, else min(2, cores)."""
     return int(os.environ.get("REALM_SYSID_WORKERS", min(2, os.cpu_count() or 1)))
@@ -79,6 +138,7 @@ class Evaluator:
         self.max_envs = max_envs
         self._sim = None
         self._pool = None
+        self.cache = RolloutCache()
         self.progress = False  # progress bars for large in-process rollouts
 
     @classmethod
@@ -125,7 +185,26 @@ class Evaluator:
 
     # ------------------------------------------------------------------ core
     def rollout(self, q0, qd0, cmd, effects: list[Effect]) -> np.ndarray:
-        """Raw batched rollout (E arms), chunked / parallel as configured; effects' theta has E rows or 1."""
+        """Batched rollout (E arms) -> (E, S + 1, 7); effects' theta has E rows or 1. Each distinct
+        arm (``arm_keys``) is simulated once, and not at all when the cache holds it."""
+        keys = arm_keys(q0, qd0, cmd, effects)
+        rows = {k: self.cache.get(k) for k in keys}
+        todo = list(dict.fromkeys(k for k in keys if rows[k] is None))
+        self.cache.hits += len(keys) - len(todo)
+        self.cache.misses += len(todo)
+        if todo:
+            first_of: dict[bytes, int] = {}
+            for i, k in enumerate(keys):
+                first_of.setdefault(k, i)
+            first = np.array([first_of[k] for k in todo])
+            sub = _effects_from_specs([_spec(fx, _theta_rows(fx, first)) for fx in effects])
+            for k, row in zip(todo, self._simulate(q0[first], qd0[first], cmd[first], sub)):
+                rows[k] = row
+                self.cache.put(k, row)
+        return np.stack([rows[k] for k in keys])
+
+    def _simulate(self, q0, qd0, cmd, effects: list[Effect]) -> np.ndarray:
+        """The rollout itself: chunked / in worker processes as configured, or on the GPU."""
         e_count = q0.shape[0]
         if self.device.startswith("cuda"):
             return self.sim.rollout(q0, qd0, cmd, effects)
@@ -135,7 +214,7 @@ class Evaluator:
         bounds = np.linspace(0, e_count, n_chunks + 1).astype(int)
         tasks = []
         for a, b in zip(bounds[:-1], bounds[1:]):
-            specs = [_spec(fx, fx.theta.cpu().numpy()[a:b] if fx.theta.shape[0] > 1 else fx.theta.cpu().numpy()) for fx in effects]
+            specs = [_spec(fx, _theta_rows(fx, slice(a, b))) for fx in effects]
             tasks.append((q0[a:b], qd0[a:b], cmd[a:b], specs))
         if self.workers > 1 and len(tasks) > 1:
             return np.concatenate(list(self._pool_get().map(_worker_run, tasks)), axis=0)

@@ -37,6 +37,7 @@ class FitConfig:
     refit: bool = True  # also refit the parameters of effects already in the model (jointly)
     multistart: bool = True  # linearised start from the given values and from typical strengths
     checkpoint: str | None = None
+    uncertainty: bool = True  # 95 % intervals of the fitted values (one more batch of k + 1 rollouts)
 
 
 @dataclass
@@ -130,7 +131,7 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
 
     (a_tr,), (a_he,) = evaluate_groups(ev, [tr_ss, he_ss], base_fixed, [group], [group.u[None]])
     after = _metrics(a_tr, a_he)
-    uncertainty = confidence_intervals(ev, tr_ss, base_fixed, group)
+    uncertainty = confidence_intervals(ev, tr_ss, base_fixed, group) if cfg.uncertainty else {}
     log(f"after: train RMSE {after['train_rmse_rad']:.3e} rad, held-out {after['heldout_rmse_rad']:.3e} rad")
     out_model = RobotModel(sorted(base_fixed + fitted, key=lambda f: f.order), model.gains, model.joint_physics,
                            model.physics_hz, dict(model.provenance))

@@ -156,6 +156,48 @@ class SegmentSet:
             mask &= unsat
         return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx, float(left_out))
 
+    @classmethod
+    def stack(cls, sets: list["SegmentSet"]) -> "SegmentSet":
+        """The segments of several sets (same physics rate) as one set, in order, to simulate in one
+        batch: a rollout's cost is mostly per physics step, not per arm. Shorter command series
+        hold their last target and shorter sample rows repeat their last sample time, as ``build``
+        pads within a set; ``split`` cuts a simulation of the stack back into the sets' shapes."""
+        if len(sets) == 1:
+            return sets[0]
+        if len({s.dt for s in sets}) != 1:
+            raise ValueError("cannot stack segment sets built at different physics rates")
+        n_steps = max(s.steps for s in sets)
+        n_samp = max(s.pos.shape[1] for s in sets)
+
+        def cat(field: str, n: int, fill=None) -> np.ndarray:
+            """The sets' ``field`` padded along axis 1 to n (repeating the last entry, or with ``fill``)."""
+            out = []
+            for s in sets:
+                a = getattr(s, field)
+                width = [(0, 0), (0, n - a.shape[1])] + [(0, 0)] * (a.ndim - 2)
+                out.append(np.pad(a, width, mode="edge") if fill is None else np.pad(a, width, constant_values=fill))
+            return np.concatenate(out)
+
+        trajs, segs = [], []
+        for s in sets:
+            segs += [Segment(g.traj + len(trajs), g.start, g.stop, g.score_from) for g in s.segments]
+            trajs += s.trajs
+        scored = [s.mask.sum() for s in sets]
+        left_out = sum(s.saturated_fraction * m for s, m in zip(sets, scored)) / max(sum(scored), 1)
+        return cls(trajs, segs, sets[0].dt, np.concatenate([s.q0 for s in sets]), np.concatenate([s.qd0 for s in sets]),
+                   cat("cmd", n_steps), cat("pos", n_samp), cat("meas", n_samp, 0.0), cat("mask", n_samp, False),
+                   cat("sample_idx", n_samp, -1), float(left_out))
+
+    @staticmethod
+    def split(sets: list["SegmentSet"], sim: np.ndarray, n_candidates: int) -> list[np.ndarray]:
+        """A candidate-major simulation (C*N, L, 7) of ``stack(sets)`` -> one (C*N_s, L_s, 7) per set."""
+        sim = sim.reshape(n_candidates, -1, *sim.shape[1:])
+        out, a = [], 0
+        for s in sets:
+            out.append(sim[:, a:a + s.n, :s.pos.shape[1]].reshape(n_candidates * s.n, s.pos.shape[1], *sim.shape[3:]))
+            a += s.n
+        return out
+
     def sample(self, hist: np.ndarray, seg_idx: np.ndarray | None = None) -> np.ndarray:
         """Simulated q (E, S+1, 7) at physics steps -> at the data samples (E, L, 7)."""
         pos = self.pos if seg_idx is None else self.pos[seg_idx]
