@@ -14,7 +14,6 @@ from __future__ import annotations
 import hashlib
 import os
 from collections import OrderedDict
-from dataclasses import asdict
 from typing import Any
 
 import numpy as np
@@ -29,8 +28,7 @@ _WORKER_SIM = None
 
 
 def _spec(fx: Effect, theta: np.ndarray) -> EffectSpec:
-    cfg = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
-    return (fx.name, cfg, theta)
+    return (fx.name, fx.config_dict(), theta)
 
 
 def _effects_from_specs(specs: list[EffectSpec]) -> list[Effect]:
@@ -70,9 +68,7 @@ def arm_keys(q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray, effects: list[Eff
     arms (every candidate's unperturbed probe, the baseline) look different."""
     per_effect = []
     for fx in sorted(effects, key=lambda f: f.name):
-        th = fx.theta.cpu().numpy()
-        on = (th != np.array([p.spec.off for p in fx.params], dtype=th.dtype)).any(axis=1)
-        per_effect.append(((fx.name + repr(_spec(fx, th[:0])[1])).encode(), th, on))
+        per_effect.append(((fx.name + repr(fx.config_dict())).encode(), fx.theta.cpu().numpy(), fx.on_rows().cpu().numpy()))
     keys = []
     for i in range(q0.shape[0]):
         h = hashlib.blake2b(digest_size=16)
@@ -230,7 +226,7 @@ class Evaluator:
             if th.shape[0] not in (1, n_candidates):
                 raise ValueError(f"{fx.name}: theta has {th.shape[0]} rows, expected 1 or {n_candidates}")
             rows = np.repeat(th, n, axis=0) if th.shape[0] == n_candidates and n_candidates > 1 else th
-            e = make_effect(fx.name, None, {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()})
+            e = make_effect(fx.name, None, fx.config_dict())
             e.set_theta(rows)
             expanded.append(e)
         hist = self.rollout(segset.q0[idx], segset.qd0[idx], segset.cmd[idx], expanded)

@@ -61,7 +61,7 @@ class Group:
 
 def copy_effect(fx: Effect) -> Effect:
     """An independent effect with ``fx``'s values and configuration."""
-    return make_effect(fx.name, fx.values(), _config_dict(fx))
+    return make_effect(fx.name, fx.values(), fx.config_dict())
 
 
 def typical_start(group: Group, keys: set[str]) -> Group:
@@ -90,12 +90,6 @@ def batch_effects(base: list[Effect], rows: list[dict[str, np.ndarray]], all_nam
     return out
 
 
-def _config_dict(fx: Effect) -> dict:
-    from dataclasses import asdict
-
-    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
-
-
 def evaluate_groups(evaluator, segsets: list[SegmentSet], base: list[Effect], groups: list[Group],
                     points: list[np.ndarray]) -> list[list]:
     """Evaluate, for each group g, the points ``points[g]`` (R_g, P_g) on every segset; all in one
@@ -110,7 +104,7 @@ def evaluate_groups(evaluator, segsets: list[SegmentSet], base: list[Effect], gr
         for fx in g.effects:
             if fx.name not in names and fx.name not in base_names:
                 names.append(fx.name)
-                configs[fx.name] = _config_dict(fx)
+                configs[fx.name] = fx.config_dict()
         for r in range(len(np.atleast_2d(pts))):
             rows.append({k: v[r:r + 1] for k, v in th.items()})
             owner.append((gi, r))

@@ -17,7 +17,7 @@ on each PhysX articulation through :class:`~realm_ms.agents.effects.build_target
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import asdict, dataclass, fields
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -110,8 +110,7 @@ class Effect(ActuationStage):
         if self.theta.shape[0] == 1:
             return None
         if getattr(self, "_rows_cache", None) is None or (device is not None and self._rows_cache[1] != device):
-            off = torch.tensor([p.spec.off for p in self.params], dtype=self.theta.dtype, device=self.theta.device)
-            act = (self.theta != off).any(dim=1)
+            act = self.on_rows()
             rows = None if bool(act.all()) else torch.nonzero(act)[:, 0]
             if rows is not None and device is not None:
                 rows = rows.to(device)
@@ -137,9 +136,17 @@ class Effect(ActuationStage):
         cache[1][key] = (rows, v)
         return v
 
+    def on_rows(self) -> torch.Tensor:
+        """(B,) bool: the theta rows where some parameter is not at its off-value."""
+        off = torch.tensor([p.spec.off for p in self.params], dtype=self.theta.dtype, device=self.theta.device)
+        return (self.theta != off).any(dim=1)
+
     def is_off(self) -> bool:
-        off = torch.tensor([p.spec.off for p in self.params], dtype=torch.float32, device=self.theta.device)
-        return bool(torch.all(self.theta == off))
+        return not bool(self.on_rows().any())
+
+    def config_dict(self) -> dict:
+        """The config as ``make_effect`` takes it back (tuples as lists: JSON, YAML and pickles alike)."""
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self.config).items()}
 
     # ------------------------------------------------------------------ build-time hook
     def build(self, articulation: Any, joint_indices: list[int]) -> None:

@@ -37,7 +37,7 @@ def terms_of(model: RobotModel | None, log=print) -> list[Term]:
         if fx.name in TRACKING_ONLY:
             log(f"note: {fx.name} is a tracking effect (needs q_cmd); it is ignored in torque space")
             continue
-        out.append(Term.make(fx.name, fx.values(), _config(fx)))
+        out.append(Term.make(fx.name, fx.values(), fx.config_dict()))
     extra = (model.provenance.get("torque_space") or {}) if model.provenance else {}
     for name, values in extra.items():
         out.append(Term.make(name, values))
@@ -58,12 +58,6 @@ def model_of(terms: list[Term], base: RobotModel | None = None) -> RobotModel:
     if extra:
         prov["torque_space"] = extra
     return RobotModel(sorted(keep + fx, key=lambda f: f.order), base.gains, base.joint_physics, base.physics_hz, prov)
-
-
-def _config(fx) -> dict:
-    from dataclasses import asdict
-
-    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(fx.config).items()}
 
 
 def _config_names(name: str) -> set[str]:
