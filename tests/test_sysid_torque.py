@@ -82,6 +82,20 @@ def test_frictionloss_is_found_and_fitted_near_the_floor(friction):
     assert d["suspects"][0]["heldout_rmse_after_nm"] <= 2 * d["baseline"]["judging_floor_nm"]
 
 
+def test_narrowed_candidates_name_what_was_left_out(friction):
+    """Screening without the friction laws leaves the friction residual: the verdict names the
+    library terms not screened (never "no effect in the library"), tracking-only effects excluded."""
+    from realm_ms.sysid.data_io import load_split
+    from realm_ms.sysid.torque import verbs
+
+    train, held = load_split(friction)
+    d = verbs.diagnose(train, held, candidates=("payload", "armature"), log=lambda *a: None)
+    assert d["verdict"] in ("partially_explained", "unexplained"), d["message"]
+    note = d["message"].split("not screened here: ", 1)[1]
+    assert "coulomb_friction" in note and "link_mass" in note and "latency" not in note and "payload" not in note
+    assert "in the library" not in d["message"]
+
+
 def test_cli_torque_space_and_tracking_effects_need_q_cmd(friction, tmp_path, capsys):
     import json
 

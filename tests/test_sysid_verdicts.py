@@ -133,8 +133,8 @@ def test_auto_names_the_library_effects_it_did_not_screen():
     """Position space screens link_mass (and LuGre) only on request: a residual auto leaves there is
     no proof that the library lacks the effect, and its message says which ones it left out."""
     from realm_ms.agents.effects import EFFECTS
-    from realm_ms.sysid.auto import _message, unscreened
-    from realm_ms.sysid.diagnose import DiagnoseConfig
+    from realm_ms.sysid.auto import _message
+    from realm_ms.sysid.diagnose import unscreened
 
     left = unscreened(DiagnoseConfig().candidates, {"gravity_comp_error"})
     assert "link_mass" in left and "lugre_friction" in left and "coulomb_friction" not in left
@@ -145,3 +145,30 @@ def test_auto_names_the_library_effects_it_did_not_screen():
     assert "not screened" not in _message("partially_explained", 7.7e-3, 3.4e-3, 2.7e-4, [], None, [])
     assert "link_mass" in _message("unexplained", 7.7e-3, 7.7e-3, 2.7e-4, [], None, ["link_mass"])
     assert "not screened" not in _message("at_floor", 7.7e-3, 3e-4, 2.7e-4, [], None, ["link_mass"])
+
+
+def test_diagnose_names_the_library_effects_it_did_not_screen():
+    """diagnose's own verdict: a residual left after screening some of the library does not blame
+    "no effect in the library"; it names those left out and the command that ranks them."""
+    from realm_ms.sysid.diagnose import unscreened
+
+    left = unscreened(CFG.candidates, set())
+    assert left and "link_mass" in left
+    # unexplained: nothing screened helps
+    v, msg, _ = judge_verdict(7.7e-3, 0.1e-3, [_s("gravity_comp_error", 7.7e-3, 7.5e-3)], CFG, left_out=left)
+    assert v == "unexplained" and "no screened effect explains" in msg and "in the library" not in msg
+    assert f"--candidates {','.join(left)}" in msg
+    # partially explained with no other suspect: "none among those screened", plus the list
+    v, msg, _ = judge_verdict(7.7e-3, 0.1e-3, [_s("gravity_comp_error", 7.7e-3, 5.2e-3)], CFG, left_out=["link_mass"])
+    assert v == "partially_explained" and "next suspects: none among those screened" in msg
+    assert "not screened here: link_mass (" in msg
+    # the whole library screened: the old wording, no list
+    v, msg, _ = judge_verdict(7.7e-3, 0.1e-3, [_s("gravity_comp_error", 7.7e-3, 5.2e-3)], CFG)
+    assert "none in the library" in msg and "not screened" not in msg
+    v, msg, _ = judge_verdict(7.7e-3, 0.1e-3, [_s("gravity_comp_error", 7.7e-3, 7.5e-3)], CFG)
+    assert "no effect in the library explains" in msg and "not screened" not in msg
+    # found and no-missing-effect verdicts are unchanged by the list
+    v, msg, _ = judge_verdict(7.7e-3, 0.1e-3, [_s("gravity_comp_error", 7.7e-3, 0.2e-3)], CFG, left_out=left)
+    assert v == "found" and "not screened" not in msg
+    v, msg, _ = judge_verdict(0.2e-3, 0.1e-3, [], CFG, left_out=left)
+    assert v == "no_missing_effect" and "not screened" not in msg

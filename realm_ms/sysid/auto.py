@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.robot_model import RobotModel
-from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, diagnose, judging_floor
+from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, diagnose, judging_floor, unscreened, unscreened_note
 from realm_ms.sysid.fit import FitConfig, fit
 from realm_ms.sysid.timeseries import Trajectory
 
@@ -200,35 +200,20 @@ def bounds_note(at_bounds: dict[str, str]) -> str:
             "so read these values with care")
 
 
-def unscreened(candidates, seen) -> list[str]:
-    """Library effects this run neither screened nor fitted (``seen``: tried or in the model), by name."""
-    from realm_ms.agents.effects import EFFECTS
-
-    return [n for n in EFFECTS if n not in candidates and n not in seen]
-
-
-def _unscreened_note(names: list[str]) -> str:
-    """A clause naming the library effects the loop left out: a residual it leaves is not proof that
-    the library lacks the effect (position space screens ``link_mass`` only on request)."""
-    if not names:
-        return ""
-    listed = ",".join(names)
-    return f"; not screened here: {', '.join(names)} (rank them with `realm sysid diagnose DATA --candidates {listed}`)"
-
-
 def _message(verdict: str, nominal: float, final: float, floor: float, kept: list[AutoStep],
              at_bounds: dict[str, str] | None = None, left_out: list[str] = ()) -> str:
     chain = " -> ".join([f"nominal {nominal:.2e}"] + [f"+{s.effect} {s.heldout_rmse:.2e}" for s in kept]) + " rad"
     if verdict == "at_floor":
         return f"at the floor ({final:.2e} <= 1.5x {floor:.2e} rad): {chain}" + bounds_note(at_bounds or {})
+    left_out = list(left_out)
     outside = "an effect outside the library" if not left_out else "an effect not screened or outside the library"
     if verdict == "partially_explained":
         share = 1 - max(final**2 - floor**2, 0) / max(nominal**2 - floor**2, 1e-30)
         return (f"partially explained ({100 * share:.0f}% of the model error): {chain}; residual {final:.2e} rad "
                 f"left ({final / floor:.1f}x the floor): {outside}, or a plant/controller mismatch"
-                + _unscreened_note(list(left_out)) + bounds_note(at_bounds or {}))
+                + unscreened_note(left_out) + bounds_note(at_bounds or {}))
     return (f"unexplained: no screened effect lowers the held-out RMSE {nominal:.2e} rad "
-            f"({nominal / floor:.1f}x the floor {floor:.2e} rad)" + _unscreened_note(list(left_out)))
+            f"({nominal / floor:.1f}x the floor {floor:.2e} rad)" + unscreened_note(left_out))
 
 
 class _NoBar:

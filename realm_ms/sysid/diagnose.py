@@ -235,7 +235,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
 
     log(f"noise floor ≈ {floor:.2e} rad")
     # 5. verdict
-    verdict, msg, judge = judge_verdict(base_he_rmse, floor, suspects, cfg)
+    verdict, msg, judge = judge_verdict(base_he_rmse, floor, suspects, cfg, left_out=unscreened(cfg.candidates, present))
     # the verdict (msg) is printed once, by the caller (CLI: on stdout)
     return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), verdict == "found", suspects, feats,
                      msg, verdict == "unexplained", verdict, judge, he_ss.saturated_fraction)
@@ -246,9 +246,11 @@ def judging_floor(noise_floor: float, replay_floor: float) -> float:
 
 
 def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg: DiagnoseConfig,
-                  unit: str = "rad") -> tuple[str, str, float]:
+                  unit: str = "rad", left_out: list[str] = ()) -> tuple[str, str, float]:
     """(verdict, message, judging floor) for a baseline held-out RMSE and ranked suspects; fills
-    each suspect's ``explains``. See the module docstring for the rules."""
+    each suspect's ``explains``. ``left_out``: library effects not screened (``unscreened``), named
+    where the residual is not explained. See the module docstring for the rules."""
+    left_out = list(left_out)
     floor = judging_floor(noise_floor, cfg.replay_floor_rad if unit == "rad" else 0.0)
     excess = max(base**2 - floor**2, 1e-30)
     for sp in suspects:
@@ -264,22 +266,42 @@ def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg:
         return "found", (f"missing effect found: {best.effect} (held-out RMSE {f(base)} -> {f(best.heldout_rmse_after_rad)}, "
                          f"within {cfg.found_factor:g}x the floor {f(floor)}; {100 * best.explains:.0f}% of the model "
                          "error)"), floor
+    none = "none among those screened" if left_out else "none in the library"
     if helps:
         nxt = [sp.effect for sp in suspects[1:] if sp.score >= cfg.min_improvement / 2][:3]
         left = best.heldout_rmse_after_rad
         return "partially_explained", (
             f"partially explained: {100 * best.explains:.0f}% of the model error by {best.effect} (held-out RMSE "
             f"{f(base)} -> {f(left)}), residual {f(left)} left ({left / max(floor, 1e-30):.1f}x the floor "
-            f"{f(floor)}); next suspects: {', '.join(nxt) if nxt else 'none in the library'}. Fit {best.effect}, "
-            "then diagnose again with --model (or run `realm sysid auto`)"), floor
+            f"{f(floor)}); next suspects: {', '.join(nxt) if nxt else none}. Fit {best.effect}, "
+            "then diagnose again with --model (or run `realm sysid auto`)" + unscreened_note(left_out)), floor
     if ratio <= cfg.unexplained_factor:
         return "no_missing_effect", (f"no missing effect found: held-out RMSE {f(base)} is {ratio:.1f}x the floor "
                                      f"{f(floor)} and the best candidate ({best.effect if best else '-'}) removes only "
                                      f"{100 * (best.score if best else 0):.0f}% of it"), floor
     shares = ", ".join(f"{sp.effect} {100 * sp.explains:.0f}%" for sp in suspects[:3])
-    return "unexplained", (f"unexplained: no effect in the library explains the residual (held-out RMSE {f(base)}, "
+    which = "no screened effect" if left_out else "no effect in the library"
+    return "unexplained", (f"unexplained: {which} explains the residual (held-out RMSE {f(base)}, "
                            f"{ratio:.1f}x the floor {f(floor)}); share of the model error each candidate explains: "
-                           f"{shares}. A structural mismatch (plant, controller or data) is likely"), floor
+                           f"{shares}. A structural mismatch (plant, controller or data) is likely"
+                           + unscreened_note(left_out)), floor
+
+
+def unscreened(candidates, seen, library=None) -> list[str]:
+    """Library effects (``library``: names, default every effect) neither screened (``candidates``)
+    nor already seen (tried or in the model), in library order."""
+    if library is None:
+        library = EFFECTS
+    return [n for n in library if n not in candidates and n not in seen]
+
+
+def unscreened_note(names: list[str]) -> str:
+    """A clause naming the library effects a run left out: a residual it leaves is not proof that
+    the library lacks the effect (position space screens ``link_mass`` only on request)."""
+    if not names:
+        return ""
+    listed = ",".join(names)
+    return f"; not screened here: {', '.join(names)} (rank them with `realm sysid diagnose DATA --candidates {listed}`)"
 
 
 def _floor_of(he_ss: SegmentSet, sim: np.ndarray) -> tuple[float, np.ndarray]:

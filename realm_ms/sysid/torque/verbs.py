@@ -7,7 +7,7 @@ import numpy as np
 
 from realm_ms.agents.effects import EFFECTS
 from realm_ms.agents.robot_model import RobotModel
-from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judge_verdict
+from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judge_verdict, unscreened
 from realm_ms.sysid.timeseries import Trajectory
 from realm_ms.sysid.torque.space import UNIT, Term, TorqueSet, fit_terms, residual_bands, rmse, torque_arm
 from realm_ms.sysid.torque.spectrum import high_frequency_note
@@ -107,7 +107,8 @@ def diagnose(train, held, model=None, candidates=None, config: DiagnoseConfig | 
         sp.retuned_model_params = retuned
         suspects.append(sp)
     suspects.sort(key=lambda s: -s.score)
-    verdict, msg, judge = judge_verdict(base_he, floor, suspects, cfg, unit=UNIT)
+    left_out = unscreened({_base(n) for n in names}, present, [n for n in TERMS if n not in TRACKING_ONLY])
+    verdict, msg, judge = judge_verdict(base_he, floor, suspects, cfg, unit=UNIT, left_out=left_out)
     return {"unit": UNIT, "verdict": verdict, "message": msg, "missing_effect_found": verdict == "found",
             "unexplained": verdict == "unexplained",
             "baseline": {"heldout_rmse_nm": base_he, "train_rmse_nm": base_tr, "noise_floor_nm": floor,
