@@ -184,3 +184,25 @@ def test_gravity_comp_error_holds_the_static_offset_the_law_predicts(sim):
     big = np.abs(expected) > 2e-3  # joints the error visibly moves (2, 4 at this pose)
     assert big.any()
     np.testing.assert_allclose(offset[big], expected[big], rtol=0.15)
+
+
+def test_symmetric_coulomb_shortcut_equals_the_asymmetric_law():
+    """With fc_asym zero on every row the level skips the direction blend (it runs at every law
+    tick); rows without asymmetry must get the same torque, bit for bit, as when another row's
+    asymmetry forces the full law, and an asymmetric row must differ by direction."""
+    from types import SimpleNamespace
+
+    fx = make_effect("coulomb_friction")
+    n = len(fx.params)
+    th = np.zeros((3, n))
+    th[:, :7] = 0.3
+    v = torch.tensor([[0.2, -0.2, 0.0, 1e-3, -1e-3, 0.5, -0.5]] * 3)
+    inertia, state = torch.full((3, 7), 0.05), SimpleNamespace(dt=1 / 120)
+    fx.set_theta(th)
+    sym = fx.friction_torque(v, inertia, state, None)
+    th[2, 7:] = 0.1  # asymmetric on the last row only: the full law for all
+    fx.set_theta(th)
+    full = fx.friction_torque(v, inertia, state, None)
+    assert torch.equal(sym[:2], full[:2])
+    assert torch.equal(sym[:, [2]], torch.zeros(3, 1))  # at rest: no torque
+    assert (full[2, [0, 5]].abs() > sym[2, [0, 5]].abs()).all() and (full[2, [1, 6]].abs() < sym[2, [1, 6]].abs()).all()

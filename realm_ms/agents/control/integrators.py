@@ -188,15 +188,16 @@ def _plant(drv, state: ControlState):
 
 
 def _within_step_torque(drv, state: ControlState, err0: torch.Tensor, qd_offset: torch.Tensor, plant):
-    """(e, v, law torque, tick) -> the within-step stages' plant torque at that tick, from the true
-    state the tick reaches (``qd_offset``: true minus measured velocity, held over the step).
+    """(e, v, law torque, tick, net) -> the within-step stages' plant torque at that tick, from the
+    true state the tick reaches (``qd_offset``: true minus measured velocity, held over the step).
     ``plant``: (M, M⁻¹, load) the ticks integrate M q̈ = τ − b + load + f on, for the stages' own
-    implicit steps."""
+    implicit steps; ``net``: the tick's τ − b + load, which the law has already summed."""
     act, q0 = drv.actuation, state.q
 
-    def torque(e, v, tau, t):
+    def torque(e, v, tau, t, net):
         tick = ControlState(q=q0 + (e - err0), qd=v + qd_offset, q_target=state.q_target, dt=t, model=drv.model,
-                            time=state.time, extra={"tau_motor": tau, "bias": state.extra["bias"], "plant": plant})
+                            time=state.time, extra={"tau_motor": tau, "bias": state.extra["bias"], "plant": plant,
+                                                    "_plant_net": (tau, net)})
         f = act.plant_torque(tick, within_step=True)
         return torch.zeros_like(e) if f is None else f
 

@@ -77,14 +77,15 @@ def gravity_jacobian(be, cfg, q, eps: float = 1e-3):
 
 def law_ticks(be, e, v, minv, kp, kd, bias, ext, lim, t: float, ticks: int, within=None):
     """The law's ticks with its torque clipped to the effort limits ``lim``, on M qdd = tau - bias +
-    ext (+ the ``within``-step effects' torque at each tick). Returns the end state [e, v] and the
-    within-step torque averaged over the ticks (None without ``within``)."""
+    ext (+ the ``within``-step effects' torque at each tick, ``within(e, v, tau, t, net)`` with net
+    = tau - bias + ext). Returns the end state [e, v] and the within-step torque averaged over the
+    ticks (None without ``within``)."""
     f_sum, neg_lim = None, -lim
     for _ in range(ticks):
         tau = be.clip(-(kp @ e[..., None] + kd @ v[..., None])[..., 0] + bias, neg_lim, lim)
         net = tau - bias + ext
         if within is not None:
-            f = within(e, v, tau, t)
+            f = within(e, v, tau, t, net)
             f_sum = f if f_sum is None else f_sum + f
             net = net + f
         a = (minv @ net[..., None])[..., 0]

@@ -36,11 +36,24 @@ class CoulombFriction(ImplicitJointTorque):
 
     def friction_torque(self, v_free, inertia, state, rows):
         fc, fa = self.p("fc", v_free, rows), self.p("fc_asym", v_free, rows)
-        # F+ / F- blended smoothly around v = 0 (tanh), so the asymmetry has no discontinuity
-        direction = torch.tanh(v_free / self.config.direction_velocity)
-        level = torch.clamp(fc + fa * direction, min=0)
+        level, neg_level = self._symmetric_level(fc, fa)
+        if level is None:
+            # F+ / F- blended smoothly around v = 0 (tanh), so the asymmetry has no discontinuity
+            direction = torch.tanh(v_free / self.config.direction_velocity)
+            level = torch.clamp(fc + fa * direction, min=0)
+            neg_level = -level
         stop = inertia * v_free / state.dt  # torque that stops the joint this step (stick)
-        return -torch.maximum(torch.minimum(stop, level), -level)
+        return -torch.clamp(stop, neg_level, level)  # level >= 0: the same as max(min(stop, level), -level)
+
+    def _symmetric_level(self, fc, fa):
+        """(level, -level) when no row is asymmetric (fc_asym all zero: the level does not depend on
+        the direction), else (None, None); decided once per parameter tensor, as this runs at every
+        tick."""
+        c = self.__dict__.get("_level_cache")
+        if c is None or c[0] is not fc or c[1] is not fa:
+            level = None if bool(fa.any()) else torch.clamp(fc, min=0)
+            c = self._level_cache = (fc, fa, level, None if level is None else -level)
+        return c[2], c[3]
 
     def evidence(self, values, features):
         return features.sentence_for(self, values)

@@ -87,18 +87,30 @@ class ImplicitJointTorque(Effect):
         plant, tau = state.extra.get("plant"), state.extra.get("tau_motor")
         if plant is None or tau is None:
             return None
-        b = state.q.shape[0]
-        mass, minv, ext = (x.expand(b, *x.shape[1:]) if x.shape[0] != b else x for x in plant)
+        mass, minv, ext, _ = self._step_plant(plant, state.q.shape[0], rows)
         # every within-step effect of this tick reads the same net torque: computed once per tick
+        # (the driver's ticks hand over the law's own sum)
         cached = state.extra.get("_plant_net")
         if cached is not None and cached[0] is tau:
             net = cached[1]
         else:
             net = tau - model_bias(state) + ext
             state.extra["_plant_net"] = (tau, net)
+        return mass, minv, net if rows is None else net[rows]
+
+    def _step_plant(self, plant: tuple, b: int, rows: torch.Tensor | None) -> list:
+        """[M, M⁻¹ (on ``rows``), loads (all rows), I_j (on ``rows``, filled on first use)] of the
+        driver's plant: one tuple per physics step, the same at each of its ticks, so sliced once
+        per step rather than once per tick."""
+        c = self.__dict__.get("_step_plant_cache")
+        if c is not None and c[0] is plant and c[1] is rows:
+            return c[2]
+        mass, minv, ext = (x.expand(b, *x.shape[1:]) if x.shape[0] != b else x for x in plant)
         if rows is not None:
-            mass, minv, net = mass[rows], minv[rows], net[rows]
-        return mass, minv, net
+            mass, minv = mass[rows], minv[rows]
+        out = [mass, minv, ext, None]
+        self._step_plant_cache = (plant, rows, out)
+        return out
 
     def free_velocity(self, state: ControlState, rows: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
         """(v_free, I_j) on ``rows``: the velocity this step would end with without this effect,
@@ -107,7 +119,7 @@ class ImplicitJointTorque(Effect):
         plant = self.plant(state, rows)
         if plant is not None:
             _, minv, net = plant
-            return self._free_from_plant(qd, minv.to(qd.dtype), net.to(qd.dtype), state.dt)
+            return self._free_from_plant(state, rows, qd, minv.to(qd.dtype), net.to(qd.dtype))
         inertia = self._joint_inertia(state)
         if rows is not None:
             inertia = inertia[rows]
@@ -119,9 +131,12 @@ class ImplicitJointTorque(Effect):
         net = tau - model_bias(state, rows)
         return qd + state.dt * net / inertia, inertia
 
-    def _free_from_plant(self, qd, minv, net, dt: float) -> tuple[torch.Tensor, torch.Tensor]:
-        """(v_free = q̇ + h M⁻¹ net, I_j = SAFETY / (M⁻¹)_jj) on the driver's plant."""
-        return qd + dt * (minv @ net.unsqueeze(-1)).squeeze(-1), self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
+    def _free_from_plant(self, state, rows, qd, minv, net) -> tuple[torch.Tensor, torch.Tensor]:
+        """(v_free = q̇ + h M⁻¹ net, I_j = SAFETY / (M⁻¹)_jj) on the driver's plant (I_j once per step)."""
+        step = self._step_plant(state.extra["plant"], state.q.shape[0], rows)
+        if step[3] is None or step[3].dtype != qd.dtype:
+            step[3] = self.SAFETY / torch.diagonal(minv, dim1=1, dim2=2)
+        return qd + state.dt * (minv @ net.unsqueeze(-1)).squeeze(-1), step[3]
 
     #: the effect has a backward-Euler step coupled through the whole mass matrix (``coupled_torque``)
     coupled = False
@@ -140,7 +155,7 @@ class ImplicitJointTorque(Effect):
                 v_free = qd + state.dt * torch.linalg.solve(mass, net)
             else:
                 mass, minv, net = (x.to(qd.dtype) for x in plant)
-                v_free, inertia = self._free_from_plant(qd, minv, net, state.dt)
+                v_free, inertia = self._free_from_plant(state, rows, qd, minv, net)
             return scatter_rows(state.q, rows, self.coupled_torque(state, rows, qd, mass, net, v_free, inertia))
         # no motor torque this tick, or a per-joint effect: the per-joint form
         v_free, inertia = self.free_velocity(state, rows)
