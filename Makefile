@@ -26,11 +26,13 @@ bench-expert: setup
 bench-assets: setup
 	$(PY) bench/assets.py
 
-# diagnose + fit, then `realm sysid auto` in position space and in torque space (10 x 10 s logs)
+# diagnose + fit, then `realm sysid auto` in position space and in torque space (10 x 10 s logs),
+# and what each effect adds to a rollout per physics step (the hints that split batches over workers)
 bench-sysid: setup
 	$(PY) bench/sysid.py
 	$(PY) bench/sysid.py --auto --hidden coulomb_friction:fc=0.3
 	$(PY) bench/sysid.py --torque
+	$(PY) bench/sysid_effect_cost.py
 
 bench-eval: setup
 	$(PY) bench/eval_throughput.py

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from realm_ms.agents.effects import make_effect
-from realm_ms.sysid.engine import Evaluator, RolloutCache, arm_keys
+from realm_ms.sysid.engine import Evaluator, RolloutCache, arm_keys, plan_chunks
 from realm_ms.sysid.excite import ExciteConfig, excite
 
 
@@ -24,6 +24,59 @@ def test_chunking_is_transparent():
     one = Evaluator(workers=1, max_envs=100).rollout(q0, np.zeros_like(q0), cmd, [fx])
     chunked = Evaluator(workers=1, max_envs=4).rollout(q0, np.zeros_like(q0), cmd, [fx])
     np.testing.assert_allclose(one, chunked, atol=1e-6)
+
+
+def test_plan_spreads_costly_effects_over_chunks_and_keeps_each_group_whole():
+    # a screening batch in candidate order: two costly laws first, then two cheap effects, then
+    # arms with no effect; contiguous halves would put both costly laws in one chunk
+    groups = [0] * 3 + [1] * 3 + [2] * 4 + [3] * 2 + [-1] * 2
+    on = np.array([[g == f for f in range(4)] for g in groups])
+    costs = np.array([[10.0, 0.1], [9.0, 0.1], [1.0, 0.0], [1.0, 0.0]])  # per step, per arm on
+    chunks = plan_chunks(on, costs, n_chunks=2, max_envs=100)
+    assert len(chunks) == 2
+    assert sorted(np.concatenate(chunks).tolist()) == list(range(len(groups)))
+    owner = {int(i): c for c, rows in enumerate(chunks) for i in rows}
+    for g in set(groups):
+        assert len({owner[i] for i, gi in enumerate(groups) if gi == g}) == 1  # a group is not cut
+    assert owner[0] != owner[3]
+    assert all(np.all(np.diff(rows) > 0) for rows in chunks)
+
+    # no chunk over max_envs: the big group is cut, a chunk is added where the pieces do not pack,
+    # and the plan still covers every arm once
+    chunks = plan_chunks(on, costs, n_chunks=5, max_envs=3)
+    assert max(map(len, chunks)) <= 3
+    assert sorted(np.concatenate(chunks).tolist()) == list(range(len(groups)))
+
+    # arms that all run the same effects: equal contiguous chunks, as before
+    same = np.ones((10, 2), bool)
+    assert [c.tolist() for c in plan_chunks(same, np.ones((2, 2)), 2, 100)] == [list(range(5)), list(range(5, 10))]
+    assert [c.tolist() for c in plan_chunks(np.zeros((3, 0), bool), np.ones((0, 2)), 1, 100)] == [[0, 1, 2]]
+
+    # an effect that costs per arm, on most of the batch: its group kept whole would be the dearest
+    # chunk, so the equal contiguous halves are kept
+    on = np.zeros((12, 2), bool)
+    on[:10, 0] = on[10:, 1] = True
+    chunks = plan_chunks(on, np.array([[0.0, 1.0], [0.1, 0.0]]), 2, 100)
+    assert [c.tolist() for c in chunks] == [list(range(6)), list(range(6, 12))]
+
+
+def test_a_mixed_batch_in_chunks_matches_one_chunk():
+    # arms with Coulomb, arms with armature, arms with neither: chunked by effect, each chunk
+    # leaving out the effect that is off on all its arms, the arms come back in their order
+    q0, cmd = _batch(9)
+    fric, arm = make_effect("coulomb_friction"), make_effect("armature")
+    th_f = np.zeros((9, len(fric.params)))
+    th_f[[0, 4, 8], :7] = 0.3
+    th_a = np.zeros((9, len(arm.params)))
+    th_a[[1, 2, 5], :] = 0.2
+    fric.set_theta(th_f)
+    arm.set_theta(th_a)
+    one = Evaluator(workers=1, max_envs=100).rollout(q0, np.zeros_like(q0), cmd, [fric, arm])
+    chunked = Evaluator(workers=1, max_envs=4).rollout(q0, np.zeros_like(q0), cmd, [fric, arm])
+    np.testing.assert_allclose(one, chunked, atol=1e-5)  # float32 batches of other sizes round apart
+    bare = Evaluator(workers=1).rollout(q0, np.zeros_like(q0), cmd, [])
+    assert np.abs(chunked[[0, 1]] - bare[[0, 1]]).max(axis=(1, 2)).min() > 1e-4  # neither effect was dropped
+    np.testing.assert_allclose(chunked[3], bare[3], atol=1e-5)
 
 
 @pytest.mark.slow

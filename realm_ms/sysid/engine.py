@@ -125,6 +125,54 @@ def make_simulator(config: SimConfig | None = None, device: str | None = None):
     return ReplaySimulator(config)
 
 
+#: ms one more arm adds to a rollout per physics step on one core, as ``Effect.step_cost`` counts
+#: an effect's (bench/sysid_effect_cost.py measures both)
+ARM_STEP_COST = 0.15
+
+
+def plan_chunks(on: np.ndarray, step_cost: np.ndarray, n_chunks: int, max_envs: int) -> list[np.ndarray]:
+    """Arm indices of each chunk of a batch, at most ``max_envs`` arms per chunk.
+
+    ``on`` (E, F) says which of the batch's F effects is on at each arm; ``step_cost`` (F, 2) what
+    each costs per physics step in a chunk where it is on at all, and per arm it is on
+    (``Effect.step_cost``); every arm adds ``ARM_STEP_COST``. Two plans are costed and the one
+    whose dearest chunk costs least is kept: ``n_chunks`` contiguous equal chunks (all a batch whose
+    arms run the same effects can have: a fit's population, a baseline), or arms with the same
+    effects kept together and those groups spread over the chunks dearest first, each to the chunk
+    it leaves cheapest, so that a screening batch's costly friction laws land on different workers."""
+    e_count = on.shape[0]
+    step_cost = np.asarray(step_cost, float).reshape(-1, 2)
+    bounds = np.linspace(0, e_count, n_chunks + 1).astype(int)
+    contiguous = [np.arange(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+    sig = np.unique(on, axis=0, return_inverse=True)[1].reshape(-1)
+    if n_chunks == 1 or sig.max(initial=0) == 0:
+        return contiguous
+
+    def cost(arms_on: np.ndarray, arms: int) -> float:  # arms_on: (F,) arms each effect is on
+        used = arms_on > 0
+        return float(step_cost[used, 0].sum() + step_cost[:, 1] @ arms_on) + ARM_STEP_COST * arms
+
+    pieces = []
+    for g in np.unique(sig):
+        rows = np.flatnonzero(sig == g)
+        pieces += [(on[rows[0]] * len(r), r) for r in np.array_split(rows, -(-len(rows) // max_envs))]
+    pieces.sort(key=lambda p: -cost(p[0], len(p[1])))
+    load = [(np.zeros(on.shape[1]), 0, []) for _ in range(n_chunks)]  # (arms each effect is on, arms, pieces)
+    for arms_on, rows in pieces:
+        room = [c for c in range(len(load)) if load[c][1] + len(rows) <= max_envs]
+        if not room:  # the pieces do not pack into n_chunks: one more chunk, never one over max_envs
+            load.append((np.zeros(on.shape[1]), 0, []))
+            room = [len(load) - 1]
+        c = min(room, key=lambda c: cost(load[c][0] + arms_on, load[c][1] + len(rows)))
+        load[c] = (load[c][0] + arms_on, load[c][1] + len(rows), load[c][2] + [rows])
+    grouped = [np.sort(np.concatenate(members)) for _, _, members in load if members]
+
+    def dearest(chunks: list[np.ndarray]) -> float:
+        return max(cost(on[rows].sum(axis=0), len(rows)) for rows in chunks)
+
+    return grouped if dearest(grouped) < dearest(contiguous) else contiguous
+
+
 class Evaluator:
     def __init__(self, config: SimConfig | None = None, workers: int = 1, device: str | None = None,
                  max_envs: int = 1200):
@@ -207,14 +255,23 @@ class Evaluator:
         n_chunks = max(1, -(-e_count // self.max_envs))
         if self.workers > 1 and e_count >= 8:
             n_chunks = max(n_chunks, self.workers)
-        bounds = np.linspace(0, e_count, n_chunks + 1).astype(int)
+        on = np.stack([np.broadcast_to(fx.on_rows().cpu().numpy(), (e_count,)) for fx in effects], 1) \
+            if effects else np.zeros((e_count, 0), bool)
+        chunks = plan_chunks(on, np.array([fx.step_cost for fx in effects]).reshape(-1, 2), n_chunks, self.max_envs)
         tasks = []
-        for a, b in zip(bounds[:-1], bounds[1:]):
-            specs = [_spec(fx, _theta_rows(fx, slice(a, b))) for fx in effects]
-            tasks.append((q0[a:b], qd0[a:b], cmd[a:b], specs))
+        for rows in chunks:
+            # an effect at its off-values on every arm of a chunk replays as if absent (the effects'
+            # contract): a chunk of several leaves it out rather than pay its hooks at every step
+            specs = [_spec(fx, _theta_rows(fx, rows)) for fx, o in zip(effects, on.T) if len(chunks) == 1 or o[rows].any()]
+            tasks.append((q0[rows], qd0[rows], cmd[rows], specs))
         if self.workers > 1 and len(tasks) > 1:
-            return np.concatenate(list(self._pool_get().map(_worker_run, tasks)), axis=0)
-        return np.concatenate([self.sim.rollout(q, v, c, _effects_from_specs(s)) for q, v, c, s in tasks], axis=0)
+            parts = list(self._pool_get().map(_worker_run, tasks))
+        else:
+            parts = [self.sim.rollout(q, v, c, _effects_from_specs(s)) for q, v, c, s in tasks]
+        out = np.empty((e_count, *parts[0].shape[1:]), parts[0].dtype)
+        for rows, part in zip(chunks, parts):
+            out[rows] = part
+        return out
 
     def simulate(self, segset: SegmentSet, effects: list[Effect], n_candidates: int = 1) -> np.ndarray:
         """(C*N, L, 7) simulated positions at the data samples, candidate-major."""

@@ -11,6 +11,7 @@ from realm_ms.agents.effects.parameter import ParamSpec
 
 class Armature(Effect):
     name = "armature"
+    step_cost = (0.8, 0.0)
     summary = "armature (rotor inertia)"
     signature = "no static effect; slower rise and overshoot after target steps, residual ∝ q̈, zero in holds"
     order = 10

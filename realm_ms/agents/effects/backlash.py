@@ -20,6 +20,7 @@ class BacklashConfig(EffectConfig):
 
 class Backlash(Effect):
     name = "backlash"
+    step_cost = (4.0, 0.0)
     summary = "backlash"
     signature = "offset of ±gap/2 that flips with the sign of the load (gravity) torque, independent of speed and gains"
     order = 5

@@ -19,6 +19,7 @@ class CoulombConfig(EffectConfig):
 
 class CoulombFriction(ImplicitJointTorque):
     name = "coulomb_friction"
+    step_cost = (5.2, 0.01)
     summary = "Coulomb friction"
     signature = (
         "constant-size offset (≈ Fc / Kp) that flips sign with joint velocity, same size at all speeds; "

@@ -42,6 +42,10 @@ class Effect(ActuationStage):
     order: ClassVar[int] = 50  # position in the stage chain (lower first)
     build_time: ClassVar[bool] = False
     screened: ClassVar[bool] = True  # a default candidate of position-space diagnosis
+    # (ms per physics step, + ms per arm it is on) the effect adds to a replay rollout on one core
+    # (bench/sysid_effect_cost.py measures both): only a hint with which the evaluator spreads a
+    # screening batch's effects over its workers, never part of a result
+    step_cost: ClassVar[tuple[float, float]] = (1.0, 0.0)
     Config: ClassVar[type] = EffectConfig
 
     def __init__(self, config: EffectConfig | None = None, values: dict[str, Any] | None = None):

@@ -14,6 +14,7 @@ from realm_ms.agents.effects.parameter import ParamSpec
 
 class EncoderBias(Effect):
     name = "encoder_bias"
+    step_cost = (1.4, 0.0)
     summary = "encoder bias"
     signature = "constant offset per joint, the same in every configuration, at every speed and at rest"
     order = 4

@@ -8,6 +8,7 @@ from realm_ms.agents.effects.parameter import ParamSpec
 
 class GainMismatch(Effect):
     name = "gain_mismatch"
+    step_cost = (1.5, 0.0)
     summary = "controller gain mismatch"
     signature = "residual ∝ tracking error (static error under load ∝ 1/Kp), different bandwidth and damping"
     order = 25

@@ -9,6 +9,7 @@ from realm_ms.agents.effects.parameter import ParamSpec
 
 class GravityCompError(Effect):
     name = "gravity_comp_error"
+    step_cost = (2.8, 0.0)
     summary = "gravity-compensation error"
     signature = "static offset proportional to each joint's gravity torque g_i(q), present at rest"
     order = 30

@@ -13,6 +13,7 @@ from realm_ms.agents.effects.parameter import ParamSpec
 
 class Latency(Effect):
     name = "latency"
+    step_cost = (1.2, 0.0)
     summary = "command latency"
     signature = "residual ≈ -Δ·q̇ on all joints with one shared Δ; phase lag growing with frequency, no amplitude change"
     order = 20

@@ -55,6 +55,7 @@ def corrected(m0: torch.Tensor, c0: torch.Tensor, i0: torch.Tensor, v: torch.Ten
 
 class LinkMass(Effect):
     name = "link_mass"
+    step_cost = (13.8, 0.14)
     summary = "link inertial parameters off"
     signature = ("configuration- and acceleration-dependent residual on the joints proximal to link k "
                  "(gravity load of links above, inertia of the link itself)")

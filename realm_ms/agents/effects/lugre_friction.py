@@ -63,6 +63,7 @@ def mean_torque(z: torch.Tensor, z_new: torch.Tensor, v: torch.Tensor, h, sigma0
 
 class LuGreFriction(ImplicitJointTorque):
     name = "lugre_friction"
+    step_cost = (24.3, 0.0)
     summary = "LuGre friction (bristle pre-sliding + Stribeck)"
     signature = (
         "at reversals and in holds the joint gives like a stiff spring (up to fs/σ₀) before it slides; "

@@ -43,6 +43,7 @@ def payload_pi(mass: torch.Tensor, com: torch.Tensor, gyr: torch.Tensor, tip_off
 
 class Payload(Effect):
     name = "payload"
+    step_cost = (4.5, 0.0)
     summary = "payload at the flange"
     signature = "configuration-dependent sag following J^T m g (largest on joints 2 and 4), present at rest"
     order = 11

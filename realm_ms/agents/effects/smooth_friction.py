@@ -66,6 +66,7 @@ class SmoothFrictionConfig(EffectConfig):
 
 class SmoothFriction(ImplicitJointTorque):
     name = "smooth_friction"
+    step_cost = (12.8, 0.02)
     summary = "smooth friction, no stiction (tanh, Gaz-style)"
     signature = (
         "lag that grows with speed up to a few vs and then levels off; in holds the joint creeps to the "

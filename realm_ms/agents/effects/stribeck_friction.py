@@ -10,6 +10,7 @@ from realm_ms.agents.effects.parameter import ParamSpec
 
 class StribeckFriction(ImplicitJointTorque):
     name = "stribeck_friction"
+    step_cost = (5.0, 0.02)
     summary = "Stribeck friction / stiction"
     signature = (
         "dwell and extra lag at reversals and in slow motion, steady-state error inside ±Fs/Kp in holds; "

@@ -12,6 +12,7 @@ NOMINAL_LIMITS = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
 
 class TorqueLimit(Effect):
     name = "torque_limit"
+    step_cost = (3.4, 0.0)
     summary = "torque saturation / rate limit"
     signature = "delay that grows with the size of the 15 Hz target jumps; divergence only where |τ| is at its limit"
     order = 80

@@ -10,6 +10,7 @@ from realm_ms.agents.effects.parameter import ParamSpec
 
 class ViscousDamping(ImplicitJointTorque):
     name = "viscous_damping"
+    step_cost = (7.7, 0.0)
     summary = "viscous damping"
     signature = "lag / offset proportional to joint velocity (≈ b q̇ / Kp), amplitude drop at high frequency"
     order = 91
