@@ -257,7 +257,7 @@ class Evaluator:
             n_chunks = max(n_chunks, self.workers)
         on = np.stack([np.broadcast_to(fx.on_rows().cpu().numpy(), (e_count,)) for fx in effects], 1) \
             if effects else np.zeros((e_count, 0), bool)
-        chunks = plan_chunks(on, np.array([fx.step_cost for fx in effects]).reshape(-1, 2), n_chunks, self.max_envs)
+        chunks = plan_chunks(on, np.array([fx.step_cost for fx in effects]), n_chunks, self.max_envs)
         tasks = []
         for rows in chunks:
             # an effect at its off-values on every arm of a chunk replays as if absent (the effects'
