@@ -79,15 +79,17 @@ def test_diagnose_json_schema(data, capsys, outdir):
 
 def test_fit_json_schema_model_and_report(data, capsys, tmp_path, outdir):
     model = tmp_path / "MODEL.yaml"
+    # --noise-stop 0: every generation runs, even where the linearised start is at the noise
     code, out, err = run(capsys, "fit", data, "--add", "latency", "--out", model, "--workers", 1,
-                         "--generations", 4, "--no-progress", "--json", tmp_path / "f.json")
+                         "--generations", 4, "--noise-stop", 0, "--no-progress", "--json", tmp_path / "f.json")
     assert code == 0, err
     f = json.loads((tmp_path / "f.json").read_text())
     assert f["effects"] == ["latency"] and set(f["params"]) == {"latency.delay"}
     for k in ("before", "after"):
         assert set(f[k]) >= {"train_rmse_rad", "heldout_rmse_rad", "per_joint_heldout_rmse_rad"}
         assert len(f[k]["per_joint_heldout_rmse_rad"]) == 7
-    assert f["history"] and set(f["history"][0]) == {"generation", "best_loss", "median_loss"}
+    assert len(f["history"]) == 4 and set(f["history"][0]) == {"generation", "best_loss", "median_loss"}
+    assert f["cma_stop"] == "max_generations" and f["noise_rmse_rad"] > 0
     assert f["after"]["heldout_rmse_rad"] < 0.2 * f["before"]["heldout_rmse_rad"]
     assert f["params"]["latency.delay"] == pytest.approx(0.02, rel=0.2)
     from realm_ms.sysid import load_actuation_model

@@ -28,6 +28,55 @@ def test_one_dimensional_and_checkpoint_resume(tmp_path):
     assert abs(resumed.u[0] - 0.25) < 0.01
 
 
+def test_cma_stops_at_the_target_loss_and_does_not_start_below_it():
+    f = lambda u: ((u - 0.3) ** 2).sum(1)  # noqa: E731
+    free = cma_fit(f, np.full(2, 0.8), sigma0=0.2, max_generations=60, patience=100, progress=False)
+    target = cma_fit(f, np.full(2, 0.8), sigma0=0.2, max_generations=60, patience=100, progress=False, target_loss=1e-3)
+    assert free.stop == "max_generations" and free.generations == 60
+    assert target.stop == "target" and target.loss <= 1e-3 and 0 < target.generations < 60
+    assert target.history == free.history[: target.generations]  # the same run, cut where it got there
+    # a start already at the target: no generation at all, the start comes back
+    none = cma_fit(f, np.full(2, 0.31), sigma0=0.2, max_generations=60, progress=False, initial_loss=2e-4, target_loss=1e-3)
+    assert none.stop == "target" and none.generations == 0 and np.allclose(none.u, 0.31)
+
+
+def test_fit_skips_cma_when_the_linearised_start_is_at_the_noise(tmp_path):
+    """CMA-ES polishes what the data can still show: a linearised start that fits the train split
+    to the measurement noise (estimated from its residual) leaves it nothing, and with the check off
+    the generations run and find nothing better."""
+    from realm_ms.sysid.data_io import load_split
+    from realm_ms.sysid.engine import Evaluator
+    from realm_ms.sysid.fit import FitConfig, fit
+    from realm_ms.sysid.synth import SynthConfig, synth
+
+    ev = Evaluator(workers=1, device="cpu")
+    # 3 x 8 s: on 2 x 5 s the second-difference estimate is still ~10 % off the true noise
+    synth("viscous_damping:b=0.8", tmp_path, SynthConfig(seed=2, noise_rad=2e-4, n_train=3, n_heldout=1, duration_s=8), evaluator=ev)
+    train, held = load_split(tmp_path)
+    quiet = lambda *a: None  # noqa: E731
+    at = fit(train, held, config=FitConfig(add="viscous_damping", generations=4, uncertainty=False), evaluator=ev,
+             progress=False, log=quiet)
+    assert at.noise_rmse == pytest.approx(2e-4, rel=0.1)  # the second-difference estimate of the noise
+    assert at.cma_stop == "target" and at.history == []
+    assert at.after["train_rmse_rad"] <= 1.05 * at.noise_rmse
+    # the report's fit section still draws the linearised start and says why there are no generations
+    from types import SimpleNamespace
+
+    from realm_ms.sysid.report.sections import fit_health
+
+    title, html = fit_health(SimpleNamespace(fit=at.to_json()))
+    assert title.startswith("Fit history:") and "CMA-ES was not run" in html and "data:image/png" in html
+    full = fit(train, held, config=FitConfig(add="viscous_damping", generations=4, uncertainty=False, noise_stop=0),
+               evaluator=ev, progress=False, log=quiet)
+    assert full.cma_stop != "target" and len(full.history) == 4
+    assert full.after["heldout_rmse_rad"] == pytest.approx(at.after["heldout_rmse_rad"], rel=0.02)
+    # data the model cannot fit to the noise (the effect left out): the generations run
+    off = fit(train, held, config=FitConfig(add="latency", generations=2, uncertainty=False), evaluator=ev,
+              progress=False, log=quiet)
+    assert off.cma_stop != "target" and len(off.history) == 2 and off.after["train_rmse_rad"] > 2 * off.noise_rmse
+    ev.close()
+
+
 def test_linearized_step_recovers_a_viscous_coefficient(tmp_path):
     from realm_ms.sysid.data_io import load_dir
     from realm_ms.agents.effects import make_effect

@@ -176,6 +176,8 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_int(config["popsize"], "popsize (--popsize)", minimum=2)  # CMA-ES needs 2 to rank
     if "generations" in config:
         check_int(config["generations"], "generations (--generations)", minimum=1)
+    if "noise_stop" in config:
+        check_non_negative(config["noise_stop"], "noise_stop (--noise-stop)")
     if out is not None:
         check_output_file(out, "out (--out)")  # before the fit, not after it
     if config.get("checkpoint"):

@@ -242,7 +242,7 @@ def _fit(args) -> int:
         f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                     generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
-                    refit=not args.no_refit, space=args.space)
+                    noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space)
     print(f"fitted {', '.join(f['effects'])} -> {args.out}")
     torque = f.get("unit") == "N·m"  # torque space reports N·m (and its params carry no unit table)
     unit, key, fmt, train_fmt = ("N·m", "nm", "9.3f", ".3f") if torque else ("rad", "rad", "9.2e", ".2e")
@@ -405,6 +405,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--generations", type=integer(1), default=30, help="CMA-ES generations at most, integer >= 1 (default 30)")
     s.add_argument("--popsize", type=integer(2), default=None,
                    help="CMA-ES candidates per generation, integer >= 2 (default 4 + 3 ln(parameters))")
+    s.add_argument("--noise-stop", type=non_negative(), default=1.05, metavar="X",
+                   help="stop CMA-ES once the train RMSE is within X times the measurement noise (estimated at the "
+                   "linearised start; a start that close skips it); 0 runs every generation (default 1.05)")
     s.add_argument("--checkpoint", metavar="FILE", help="resumable optimiser state (pickle) written every generation")
     s.add_argument("--no-refit", action="store_true", help="keep the --model's own parameters fixed (default: refit them jointly)")
     s.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")

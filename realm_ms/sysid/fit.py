@@ -19,6 +19,7 @@ from realm_ms.sysid.optimize import Group, cma_fit, confidence_intervals, evalua
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
+from realm_ms.sysid.signatures import noise_floor
 from realm_ms.sysid.timeseries import Trajectory
 
 
@@ -38,6 +39,9 @@ class FitConfig:
     multistart: bool = True  # linearised start from the given values and from typical strengths
     checkpoint: str | None = None
     uncertainty: bool = True  # 95 % intervals of the fitted values (one more batch of k + 1 rollouts)
+    # CMA-ES stops (or does not start) once the train RMSE is within this factor of the measurement
+    # noise, estimated from the residual at the linearised start (0: never): what is left is noise
+    noise_stop: float = 1.05
 
 
 @dataclass
@@ -53,10 +57,15 @@ class FitResult:
     bounds: dict[str, list[float]] = field(default_factory=dict)
     # Gauss-Newton 95 % intervals at the fit (``optimize.confidence_intervals``): {key: {std, ci95}}
     uncertainty: dict[str, dict] = field(default_factory=dict)
+    # why CMA-ES stopped (``optimize.CmaResult.stop``; "target": at the measurement noise) and that
+    # noise (rad, estimated at the linearised start; None where no start improved on the given values)
+    cma_stop: str = ""
+    noise_rmse: float | None = None
 
     def to_json(self) -> dict:
         return {"effects": self.effects, "params": self.params, "before": self.before, "after": self.after,
-                "history": self.history, "units": self.units, "bounds": self.bounds,
+                "history": self.history, "cma_stop": self.cma_stop, "noise_rmse_rad": self.noise_rmse,
+                "units": self.units, "bounds": self.bounds,
                 "uncertainty": self.uncertainty, "linearized_start": self.gn_history,
                 "at_bounds": self.model.params_at_bounds()}
 
@@ -105,11 +114,13 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
         starts.append(typical_start(group, {p.key for fx in added for p in fx.free_params}))
     gn_hist = []
     mse = [np.inf] * len(starts)
+    sims = [None] * len(starts)  # the train simulation at each start's current point
     for it in range(cfg.gn_iterations):
         # first iteration as the diagnosis screens (block probes: robust for stick-slip effects),
         # then full-Jacobian iterations
         rs = linearized_step(ev, tr_ss, base_fixed, starts, first=(it == 0), block=(it == 0))
         mse = [r["mse_after"] for r in rs]
+        sims = [r["scores"][0][2][0] if r["improved"] else sim for r, sim in zip(rs, sims)]
         best = int(np.argmin(mse))
         gn_hist.append({"iteration": it + 1, "train_rmse_rad": float(np.sqrt(mse[best]))})
         log(f"linearised start {it + 1}: train RMSE {np.sqrt(rs[0]['mse_before']):.3e} -> "
@@ -122,11 +133,18 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
         return res[0][0]
 
     start_loss = gn_hist[-1]["train_rmse_rad"] ** 2 if gn_hist else None
+    sim = sims[int(np.argmin(mse))] if gn_hist else None
+    noise = noise_floor(tr_ss, np.where(tr_ss.mask[..., None], tr_ss.meas - sim, np.nan))[0] if sim is not None else None
+    target = (cfg.noise_stop * noise) ** 2 if noise and cfg.noise_stop > 0 else None
     res = cma_fit(loss, group.u.copy(), sigma0=cfg.sigma0, seed=cfg.seed, max_generations=cfg.generations,
                   popsize=cfg.popsize, patience=cfg.patience, tol=cfg.tol, checkpoint=cfg.checkpoint,
-                  progress=progress, initial_loss=start_loss)
+                  progress=progress, initial_loss=start_loss, target_loss=target)
     group.apply(res.u)
-    if res.history:
+    if res.stop == "target":
+        log(f"CMA-ES: {'stopped after ' + str(res.generations) + ' generations' if res.history else 'not run'}: "
+            f"train RMSE {np.sqrt(res.loss):.3e} rad is within {cfg.noise_stop:g}x the measurement noise "
+            f"{noise:.3e} rad, so what is left is noise")
+    elif res.history:
         log(f"CMA-ES: {res.generations} generations, best train RMSE {res.history[-1]['best_loss']:.3e} rad")
 
     (a_tr,), (a_he,) = evaluate_groups(ev, [tr_ss, he_ss], base_fixed, [group], [group.u[None]])
@@ -139,7 +157,7 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     units = {p.key: p.unit for p in group.params}
     bounds = {p.key: [p.spec.lo, p.spec.hi] for p in group.params}
     return FitResult(out_model, [fx.name for fx in fitted], params, before, after, res.history, gn_hist, units, bounds,
-                     uncertainty)
+                     uncertainty, res.stop, noise)
 
 
 def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: float = 8.0, burn_in_s: float = 1.0,

@@ -267,15 +267,19 @@ class CmaResult:
     loss: float
     history: list[dict] = field(default_factory=list)
     generations: int = 0
+    # why it stopped: "max_generations", "patience", "cmaes" (its own criteria) or "target"
+    stop: str = "max_generations"
 
 
 def cma_fit(loss_fn: Callable[[np.ndarray], np.ndarray], u0: np.ndarray, sigma0: float = 0.05, seed: int = 0,
             max_generations: int = 40, popsize: int | None = None, patience: int = 8, tol: float = 1e-3,
-            checkpoint: str | Path | None = None, progress: bool = True, initial_loss: float | None = None) -> CmaResult:
+            checkpoint: str | Path | None = None, progress: bool = True, initial_loss: float | None = None,
+            target_loss: float | None = None) -> CmaResult:
     """Minimise ``loss_fn`` (batched: (C, P) unit points -> (C,) losses) with CMA-ES in [0, 1]^P.
 
     Stops after ``max_generations``, when the best loss improved by less than ``tol`` (relative) over
-    ``patience`` generations, or when CMA-ES says so. With ``checkpoint``, the optimiser state is
+    ``patience`` generations, when CMA-ES says so, or once the best loss (``initial_loss`` included:
+    then before the first generation) is at or below ``target_loss``. With ``checkpoint``, the optimiser state is
     written after every generation and a rerun resumes from it."""
     from cmaes import CMA
 
@@ -298,12 +302,16 @@ def cma_fit(loss_fn: Callable[[np.ndarray], np.ndarray], u0: np.ndarray, sigma0:
         state = {"opt": opt, "history": [], "best_u": np.clip(u0, 0, 1), "best_loss": initial_loss if initial_loss is not None else np.inf}
     opt, history = state["opt"], state["history"]
     bar = None
-    if progress:
+    if progress and not (target_loss is not None and state["best_loss"] <= target_loss):
         from tqdm.auto import tqdm
 
         bar = tqdm(total=max_generations, initial=len(history), desc="CMA-ES", unit="gen", leave=False)
+    stop = "max_generations"
     try:
         while len(history) < max_generations:
+            if target_loss is not None and state["best_loss"] <= target_loss:
+                stop = "target"
+                break
             xs = np.array([opt.ask() for _ in range(opt.population_size)])
             us = xs[:, :dim]
             losses = np.asarray(loss_fn(us), dtype=float)
@@ -324,10 +332,12 @@ def cma_fit(loss_fn: Callable[[np.ndarray], np.ndarray], u0: np.ndarray, sigma0:
             if len(history) > patience:
                 old = history[-1 - patience]["best_loss"]
                 if old - history[-1]["best_loss"] <= tol * old:
+                    stop = "patience"
                     break
             if opt.should_stop():
+                stop = "cmaes"
                 break
     finally:
         if bar:
             bar.close()
-    return CmaResult(state["best_u"], float(state["best_loss"]), history, len(history))
+    return CmaResult(state["best_u"], float(state["best_loss"]), history, len(history), stop)

@@ -298,9 +298,9 @@ def parameters(d: ReportData):
 
 
 def fit_health(d: ReportData):
-    if not d.fit or not d.fit.get("history"):
+    if not d.fit or "train_rmse_rad" not in (d.fit.get("before") or {}):  # none, or a torque-space fit
         return "Fit history", "<p>No fit history given (pass <code>--fit FIT.json</code>).</p>"
-    h = d.fit["history"]
+    h = d.fit.get("history") or []
     fig, ax = new(1, 2, 12, 3)
     g = [x["generation"] for x in h]
     lin = d.fit.get("linearized_start") or []
@@ -319,7 +319,12 @@ def fit_health(d: ReportData):
     ax[0, 1].set_xticks(x, JOINTS)
     ax[0, 1].set_ylabel("held-out RMSE [mrad]")
     ax[0, 1].legend()
-    return "Fit history: the error falling, before/after per joint", to_img(fig, "fit history")
+    note = ""
+    if d.fit.get("cma_stop") == "target":
+        note = (f"<p class='note'>CMA-ES {'stopped after ' + str(len(h)) + ' generations' if h else 'was not run'}: the "
+                f"train RMSE is within the measurement noise ({d.fit.get('noise_rmse_rad') or 0:.2e} rad, "
+                "estimated at the linearised start) times <code>--noise-stop</code>; what is left is noise.</p>")
+    return "Fit history: the error falling, before/after per joint", note + to_img(fig, "fit history")
 
 
 SECTIONS = [overview, where_it_fails, suspects, waterfall, parameters, fit_health, overlays, residual_scatter, xcorr, hysteresis]
