@@ -34,7 +34,7 @@ from realm_ms.sysid.optimize import Group, copy_effect, evaluate_groups, lineari
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.saturation import PAD_S
 from realm_ms.agents.robot_model import RobotModel
-from realm_ms.sysid.signatures import Features, compute, noise_floor
+from realm_ms.sysid.signatures import Features, compute, noise_floor_of
 from realm_ms.sysid.timeseries import Trajectory
 
 
@@ -153,7 +153,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     empty = Group.of(copies())
     (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], fixed, [empty], [empty.u[None]])
     base_tr_rmse, base_he_rmse = float(np.sqrt(b_tr[0][0])), float(np.sqrt(b_he[0][0]))
-    floor, floor_j = _floor_of(he_ss, b_he[2][0])
+    floor, floor_j = noise_floor_of(he_ss, b_he[2][0])
     feats = compute(tr_ss, b_tr[2][0], gravity_at_samples(tr_ss, ev.sim.model if ev.device == "cpu" else _arm_model()))
     log(f"baseline held-out RMSE {base_he_rmse:.3e} rad")
 
@@ -170,7 +170,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
         he_first = [st["scores"][1][0][0] if st["improved"] else np.inf for st in steps]
         i0 = int(np.argmin(he_first))
         if np.isfinite(he_first[i0]):
-            at = judging_floor(min(floor, _floor_of(he_ss, steps[i0]["scores"][1][2][0])[0]), cfg.replay_floor_rad)
+            at = judging_floor(min(floor, noise_floor_of(he_ss, steps[i0]["scores"][1][2][0])[0]), cfg.replay_floor_rad)
             if np.sqrt(he_first[i0]) <= cfg.found_factor * at:
                 log(f"not re-screening {', '.join(names[i] for i in redo)} from typical strengths: {names[i0]} already "
                     f"brings the held-out RMSE to {np.sqrt(he_first[i0]):.2e} rad, within {cfg.found_factor:g}x the floor {at:.2e} rad")
@@ -200,7 +200,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     # the baseline's and the best screened candidate's held-out residual
     best_i = int(np.argmin(he_rmse)) if len(he_rmse) else None
     if best_i is not None and he_rmse[best_i] < base_he_rmse:
-        f2, f2_j = _floor_of(he_ss, he_sim[best_i])
+        f2, f2_j = noise_floor_of(he_ss, he_sim[best_i])
         if f2 < floor:
             floor, floor_j = f2, f2_j
 
@@ -302,12 +302,6 @@ def unscreened_note(names: list[str]) -> str:
         return ""
     listed = ",".join(names)
     return f"; not screened here: {', '.join(names)} (rank them with `realm sysid diagnose DATA --candidates {listed}`)"
-
-
-def _floor_of(he_ss: SegmentSet, sim: np.ndarray) -> tuple[float, np.ndarray]:
-    """The noise floor (overall, per joint) estimated from the held-out residual of a simulation
-    (N, L, 7) of ``he_ss`` (the one the screening step already ran at the group's point)."""
-    return noise_floor(he_ss, np.where(he_ss.mask[..., None], he_ss.meas - sim, np.nan))
 
 
 def _own_insensitive(group: Group, step: dict) -> list[str]:

@@ -19,7 +19,7 @@ from realm_ms.sysid.optimize import Group, cma_fit, confidence_intervals, evalua
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
-from realm_ms.sysid.signatures import noise_floor
+from realm_ms.sysid.signatures import noise_floor, noise_floor_of
 from realm_ms.sysid.timeseries import Trajectory
 
 
@@ -134,7 +134,7 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
 
     start_loss = gn_hist[-1]["train_rmse_rad"] ** 2 if gn_hist else None
     sim = sims[int(np.argmin(mse))] if gn_hist else None
-    noise = noise_floor(tr_ss, np.where(tr_ss.mask[..., None], tr_ss.meas - sim, np.nan))[0] if sim is not None else None
+    noise = noise_floor_of(tr_ss, sim)[0] if sim is not None else None
     target = (cfg.noise_stop * noise) ** 2 if noise and cfg.noise_stop > 0 else None
     res = cma_fit(loss, group.u.copy(), sigma0=cfg.sigma0, seed=cfg.seed, max_generations=cfg.generations,
                   popsize=cfg.popsize, patience=cfg.patience, tol=cfg.tol, checkpoint=cfg.checkpoint,
@@ -164,7 +164,6 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
             evaluator=None) -> dict:
     """Replay ``data`` with ``model``: per-joint RMSE / max error, error over time, noise floor."""
     from realm_ms.sysid.engine import Evaluator
-    from realm_ms.sysid.signatures import noise_floor
     from realm_ms.sysid.simulator import SimConfig
 
     model = model or RobotModel()

@@ -301,15 +301,18 @@ def cma_fit(loss_fn: Callable[[np.ndarray], np.ndarray], u0: np.ndarray, sigma0:
                   population_size=popsize)
         state = {"opt": opt, "history": [], "best_u": np.clip(u0, 0, 1), "best_loss": initial_loss if initial_loss is not None else np.inf}
     opt, history = state["opt"], state["history"]
+    def at_target() -> bool:
+        return target_loss is not None and state["best_loss"] <= target_loss
+
     bar = None
-    if progress and not (target_loss is not None and state["best_loss"] <= target_loss):
+    if progress and not at_target():
         from tqdm.auto import tqdm
 
         bar = tqdm(total=max_generations, initial=len(history), desc="CMA-ES", unit="gen", leave=False)
     stop = "max_generations"
     try:
         while len(history) < max_generations:
-            if target_loss is not None and state["best_loss"] <= target_loss:
+            if at_target():
                 stop = "target"
                 break
             xs = np.array([opt.ask() for _ in range(opt.population_size)])

@@ -241,3 +241,8 @@ def noise_floor(segset, residual: np.ndarray) -> tuple[float, np.ndarray]:
     d = np.concatenate(d2)
     sigma = np.median(np.abs(d - np.median(d, axis=0)), axis=0) / 0.6745 / np.sqrt(6.0)
     return float(np.sqrt(np.mean(sigma**2))), sigma
+
+
+def noise_floor_of(segset, sim: np.ndarray) -> tuple[float, np.ndarray]:
+    """``noise_floor`` of the residual of a simulation (N, L, 7) of ``segset`` at its data samples."""
+    return noise_floor(segset, np.where(segset.mask[..., None], segset.meas - sim, np.nan))
