@@ -307,8 +307,9 @@ def fit_health(d: ReportData):
     xs = [-len(lin)] + [-len(lin) + 1 + i for i in range(len(lin))]
     ys = [d.fit["before"]["train_rmse_rad"]] + [x["train_rmse_rad"] for x in lin]
     ax[0, 0].semilogy(xs, ys, "o-", color="tab:red", label="before / linearised start")
-    ax[0, 0].semilogy([xs[-1]] + g, [ys[-1]] + [x["best_loss"] for x in h], "o-", ms=3, label="CMA-ES best")
-    ax[0, 0].semilogy(g, [x["median_loss"] for x in h], label="CMA-ES median", alpha=0.6)
+    if h:  # none where the linearised start was already at the noise
+        ax[0, 0].semilogy([xs[-1]] + g, [ys[-1]] + [x["best_loss"] for x in h], "o-", ms=3, label="CMA-ES best")
+        ax[0, 0].semilogy(g, [x["median_loss"] for x in h], label="CMA-ES median", alpha=0.6)
     ax[0, 0].set_xlabel("step (≤ 0: before and linearised start; > 0: CMA-ES generation)")
     ax[0, 0].set_ylabel("train RMSE [rad]")
     ax[0, 0].legend()
