@@ -11,11 +11,14 @@ setup:
 demo: setup
 	$(PY) -m realm_ms.cli demo
 
+# the suite in TEST_WORKERS pytest-xdist processes, one test file per process at a time (a file's
+# module-scoped set-up, e.g. a trained checkpoint or a synthetic dataset, is built once)
+TEST_WORKERS ?= 2
 test: setup
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 test-slow: setup
-	$(PY) -m pytest -q -m slow --run-slow
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile -m slow --run-slow
 
 bench: setup
 	$(PY) bench/step_rate.py

@@ -5,6 +5,11 @@ import os
 import pytest
 
 os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    # `make test` runs pytest-xdist workers side by side: one OpenMP/BLAS thread each (and in the
+    # commands they start), so that two workers share two cores instead of oversubscribing them
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 
 def pytest_addoption(parser):
