@@ -63,9 +63,10 @@ class RealmEnvConfig:
         _check_int("num_envs", self.num_envs, minimum=1)
         if self.horizon is not None:
             _check_int("horizon (max_episode_steps)", self.horizon, minimum=1)
-        from realm_ms.agents.droid_action_spaces import check_action_space
+        from realm_ms.agents.droid_action_spaces import check_action_space, check_control_mode
 
         check_action_space(self.action_space, self.gripper_action_space)
+        check_control_mode(self.action_space, self.gripper_action_space, self.control_mode)
         if isinstance(self.perturbation, list):
             object.__setattr__(self, "perturbation", tuple(self.perturbation))
         if isinstance(self.robot_model, Path):

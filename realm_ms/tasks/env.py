@@ -52,6 +52,10 @@ class RealmEnv(BaseEnv):
         """``config`` or its fields as keywords (``camera_width=``, ``shader=``, ``droid_control=``,
         ``robot_model=``, ``perturbation=``, ... see ``RealmEnvConfig``); other keywords go to ManiSkill."""
         config, kwargs = RealmEnvConfig.from_kwargs(config, kwargs)
+        from realm_ms.agents.droid_action_spaces import check_control_mode
+
+        # before the scene is built: DROID's spaces convert to droid_joint_pos targets only
+        check_control_mode(config.action_space, config.gripper_action_space, kwargs.get("control_mode"))
         self.robot_model = None
         if config.robot_model is not None:  # an identified model: its effects and the presets it was fitted on
             from realm_ms.agents.robot_model import load_robot_model
