@@ -51,6 +51,15 @@ def _space(trajs: list[Trajectory], space: str | None) -> str:
     return space
 
 
+def _checked_space(trajs: list[Trajectory], space: str | None) -> str:
+    """``_space``, for the verbs that reach a verdict or fit: data with nothing to identify is refused."""
+    from realm_ms.sysid.timeseries import check_identifiable
+
+    space = _space(trajs, space)
+    check_identifiable(trajs, space)
+    return space
+
+
 def _model(model):
     from realm_ms.agents.robot_model import RobotModel
 
@@ -152,7 +161,7 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
 
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, space) == "torque":
+    if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
         cands = config.pop("candidates", None)
@@ -184,7 +193,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, space) == "torque":
+    if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
         j = verbs.fit(train, held, add, m, refit=config.get("refit", True), log=log)
@@ -226,7 +235,7 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
         check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, space) == "torque":
+    if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
         res = verbs.auto(train, held, m, AutoConfig(seed=seed, **config), log)
@@ -254,7 +263,7 @@ def report(data, model=None, out: str | Path = "report.html", heldout=None, seed
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
+    if _checked_space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
         from realm_ms.sysid.report.torque_report import build_torque_report
 
         auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")
