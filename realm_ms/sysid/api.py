@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from realm_ms.sysid.timeseries import MIN_SAMPLES, DataError, Trajectory
-from realm_ms.validate import InputError, check_int, check_non_negative, check_positive
+from realm_ms.validate import InputError, check_device, check_int, check_non_negative, check_positive
 
 #: shortest synthetic trajectory the other verbs accept: 1 s burn-in plus at least 1 s scored
 MIN_SYNTH_DURATION_S = 2.0
@@ -72,14 +72,7 @@ def _evaluator(model, workers=None, device=None, progress: bool = True):
     if workers is not None:
         workers = check_int(workers, "workers (--workers)", minimum=1)
     if device is not None:
-        if device not in ("cpu", "cuda") and not str(device).startswith("cuda:"):
-            raise InputError(f"device (--device): unknown device {device!r}; use cpu or cuda")
-        if str(device).startswith("cuda"):
-            import torch
-
-            if not torch.cuda.is_available():
-                raise InputError("--device cuda: no CUDA GPU is available here (torch.cuda.is_available() is False); "
-                                 "use --device cpu or leave --device out")
+        check_device(device)
 
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.simulator import SimConfig
