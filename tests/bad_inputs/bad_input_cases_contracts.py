@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from bad_input_cases import Case, cli
+from bad_input_cases_runs import _make
 from bad_input_files import HOME, npz_dir
 
 CPU = "--device cpu --workers 1"
@@ -75,19 +76,6 @@ def make_files(root: Path) -> None:
 
 
 # ---------------------------------------------------------------------------- helpers
-def _gym(**kw):
-    def call(root):
-        import gymnasium as gym
-
-        import realm_ms  # noqa: F401
-
-        env = gym.make(TASK, obs_mode="state", **kw)
-        env.close()
-        return env
-
-    return call
-
-
 def _config(**kw):
     def call(root):
         from realm_ms.tasks import RealmEnvConfig
@@ -222,11 +210,11 @@ def _check_quick_steps(recipe) -> None:
 # ---------------------------------------------------------------------------- cases
 CASES: list[Case] = [
     # ------------------------------------------------------------------------ action spaces x control modes
-    Case("space-jv-under-pd-joint-delta", call=_gym(action_space="joint_velocity", control_mode="pd_joint_delta_pos"),
+    Case("space-jv-under-pd-joint-delta", call=_make(action_space="joint_velocity", control_mode="pd_joint_delta_pos"),
          error=r"action_space 'joint_velocity' is DROID's and needs control_mode='droid_joint_pos' \(got 'pd_joint_delta_pos'\)", env=True),
-    Case("space-cv-under-pd-ee-delta", call=_gym(action_space="cartesian_velocity", control_mode="pd_ee_delta_pose"),
+    Case("space-cv-under-pd-ee-delta", call=_make(action_space="cartesian_velocity", control_mode="pd_ee_delta_pose"),
          error=r"'cartesian_velocity' is DROID's and needs control_mode='droid_joint_pos'", env=True),
-    Case("space-gripper-velocity-under-pd-joint-pos", call=_gym(gripper_action_space="velocity", control_mode="pd_joint_pos"),
+    Case("space-gripper-velocity-under-pd-joint-pos", call=_make(gripper_action_space="velocity", control_mode="pd_joint_pos"),
          error=r"action_space 'joint_position:velocity' is DROID's and needs control_mode", env=True),
     Case("space-config-cp-under-pd", call=_config(action_space="cartesian_position", control_mode="pd_joint_pos"),
          error=r"'cartesian_position' is DROID's and needs control_mode='droid_joint_pos'"),
@@ -255,7 +243,7 @@ CASES: list[Case] = [
     cli("model-physics-hz-1500000", f"sysid compare {{root}}/good --model {C}/hz_1500000.yaml {CPU}",
         r"hz_1500000\.yaml: physics_hz: 1\.5e\+06 Hz is outside the supported 60-2000 Hz"),
     cli("model-physics-hz-30", f"sysid compare {{root}}/good --model {C}/hz_30.yaml {CPU}", r"physics_hz: 30 Hz is outside the supported"),
-    Case("model-physics-hz-2010-in-env", call=_gym(robot_model={"physics_hz": 2010}), error=r"physics_hz: 2010 Hz is outside", env=True),
+    Case("model-physics-hz-2010-in-env", call=_make(robot_model={"physics_hz": 2010}), error=r"physics_hz: 2010 Hz is outside", env=True),
     cli("model-effect-twice", f"sysid compare {{root}}/good --model {C}/twice.yaml {CPU}",
         r"twice\.yaml: effects\[1\]: effect 'latency' given twice \(also effects\[0\]\)"),
     Case("model-units-mnm-converted", call=_model("units_mnm.yaml"),
