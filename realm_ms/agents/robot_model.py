@@ -91,8 +91,9 @@ def check_effects(effects: list[Effect], where: str, labels: list[str] | None = 
         label = labels[i] if labels else e.name
         check_settings(e, f"{where}{label}.config")
         if e.name in seen:
-            also = f" (also {seen[e.name]})" if seen[e.name] != label else ""
-            raise ValueError(f"{where}{label}: effect {e.name!r} given twice{also}; give it once")
+            if seen[e.name] == label:  # named by the effect alone (a spec on the command line)
+                raise ValueError(f"{where}effect {e.name!r} given twice; give it once")
+            raise ValueError(f"{where}{label}: effect {e.name!r} given twice (also {seen[e.name]}); give it once")
         seen[e.name] = label
 
 
