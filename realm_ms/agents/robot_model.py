@@ -33,8 +33,8 @@ from realm_ms.agents.effects import Effect, effect_class, make_effect
 FORMAT_VERSION = 1
 #: the benchmark's policy rate; physics must run a whole number of steps per control step
 CONTROL_HZ = 15
-#: sane physics rates: below 60 Hz the impedance law is unstable at Polymetis gains; above 2 kHz a
-#: step costs more than it resolves (1.5 MHz would take hours per control step, i.e. a hang)
+#: physics rates accepted: 60 Hz (4 steps per control step) to 2 kHz (133); the envs default to
+#: 120 Hz, and a rate such as 1.5 MHz, a multiple of 15, would take hours per control step (a hang)
 PHYSICS_HZ_RANGE = (60.0, 2000.0)
 
 
@@ -124,7 +124,9 @@ def _convert_units(name: str, params: dict, config: dict, units: Any, where: str
         return params
     if not isinstance(units, dict):
         raise ValueError(f"{where}: expected a mapping of parameter -> unit, got {units!r}")
-    specs = {s.name: s for s in make_effect(name, None, config).specs}
+    effect = make_effect(name, None, config)
+    specs = {s.name: s for s in effect.specs}
+    spec_of = {p.local_key: p.spec.name for p in effect.params} | {n: n for n in specs}  # fc4 -> fc
     factors = {}
     for key, given in units.items():
         if key not in specs:
@@ -132,8 +134,7 @@ def _convert_units(name: str, params: dict, config: dict, units: Any, where: str
         factors[key] = unit_factor(given, specs[key].unit, f"{where}.{key}")
     out = {}
     for key, v in params.items():
-        spec = key if key in specs else key.rstrip("0123456789")  # fc4 -> fc
-        f = factors.get(spec, 1.0)
+        f = factors.get(spec_of.get(key), 1.0)
         if f != 1.0 and not isinstance(v, bool):
             try:
                 v = (np.asarray(v, dtype=float) * f).tolist()
