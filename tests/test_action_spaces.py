@@ -310,3 +310,22 @@ def test_baselines_act_in_the_env_space(envs, space):
     assert np.abs(q8 - ref[-1, :7]).max() < 0.06, (q8, ref[-1, :7])
     with pytest.raises(ValueError, match="--action-space: unknown action_space 'joint_vel'"):
         make_policy("zero", action_space="joint_vel")
+
+
+def test_a_finite_huge_action_is_outside_the_space_not_nan(envs):
+    """1e39 is finite: it used to be refused as "NaN or Inf" (it overflows float32)."""
+    import warnings
+
+    u = envs["joint_position"].unwrapped
+    a = np.array([1e39, -0.6, 0.0, -2.4, 0.0, 1.9, 0.0, 0.0])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        t = u._checked_action(a)
+    assert float(t.reshape(-1)[0]) == pytest.approx(2.8973, abs=1e-4) and t.dtype == torch.float32
+    assert any("outside the action space" in str(w.message) for w in caught) or "0" in u._action_warned
+    v = envs["joint_velocity"].unwrapped
+    q = v.agent.arm_qpos[0].double().numpy()
+    t = v._checked_action(np.array([1e39, 0, 0, 0, 0, 0, 0, 0.0]))[0].double().numpy()
+    assert t[0] == pytest.approx(min(q[0] + 0.2, 2.8973), abs=1e-5) and np.allclose(t[1:7], q[1:7], atol=1e-5)
+    with pytest.raises(ValueError, match="NaN or Inf"):
+        u._checked_action(np.array([np.inf, 0, 0, 0, 0, 0, 0, 0.0]))

@@ -132,6 +132,20 @@ def _check_still(moved: float) -> None:
     assert moved < 0.02, f"the zero policy moved a joint by {moved:.3f} rad"  # read as velocities: 0.74 rad of path
 
 
+def _step_huge(root):
+    """A finite 1e39 joint target: beyond float32, but a value outside the space, not NaN/Inf."""
+    import gymnasium as gym
+
+    import realm_ms  # noqa: F401
+
+    env = gym.make(TASK, obs_mode="state")
+    try:
+        env.reset(seed=0)
+        return env.step(np.concatenate([HOME, [0.0]]) + np.array([1e39, 0, 0, 0, 0, 0, 0, 0]))
+    finally:
+        env.close()
+
+
 def _expert_under(control_mode: str):
     def call(root):
         import gymnasium as gym
@@ -233,6 +247,7 @@ CASES: list[Case] = [
          accepted="no --action-space: joint_position"),
     Case("space-zero-executed-holds-still", call=_held_still, check=_check_still, env=True,
          accepted="the zero baseline under joint_velocity:position keeps the arm within 0.02 rad over a chunk"),
+    Case("space-action-1e39-is-finite", call=_step_huge, error=r"outside the action space .* are clipped", env=True, warn_ok=True),
     Case("space-zero-unknown-gripper", call=_policy_chunk("zero", action_space="joint_velocity:sideways"),
          error=r"--action-space: unknown gripper_action_space 'sideways'"),
     cli("space-eval-zero-unknown-space", f"eval --policy zero --action-space joint_vel --tasks {TASK} --episodes 1 "
