@@ -362,10 +362,15 @@ def parse_action_space_flag(text: str | None) -> dict:
     return {"action_space": space} | ({"gripper_action_space": grip} if grip else {})
 
 
+def space_of_keywords(env_kwargs: dict | None) -> DroidActionSpace:
+    """The action space env keywords (``action_space``, ``gripper_action_space``) describe."""
+    kw = env_kwargs or {}
+    return make_action_space(kw.get("action_space", "joint_position"), kw.get("gripper_action_space"))
+
+
 def action_space_name(env_kwargs: dict | None) -> str:
     """``SPACE:GRIPPER`` (resolved, e.g. ``joint_velocity:velocity``) of env keywords: records name it."""
-    kw = env_kwargs or {}
-    space = make_action_space(kw.get("action_space", "joint_position"), kw.get("gripper_action_space"))
+    space = space_of_keywords(env_kwargs)
     return f"{space.action_space}:{space.gripper}"
 
 

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from realm_ms.agents.droid_action_spaces import DroidActionSpace, DroidIK, make_action_space, parse_action_space_flag
+from realm_ms.agents.droid_action_spaces import (DroidActionSpace, DroidIK, make_action_space, parse_action_space_flag,
+                                                 space_of_keywords)
 from realm_ms.eval.policies import POLICIES
 from realm_ms.eval.policies.policy import Policy, PolicyInput, PolicyOutput
 
@@ -26,10 +27,9 @@ Q_HIGH = np.array([2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973, 1.0]
 def space_of(action_space: str | None) -> DroidActionSpace:
     """The DROID action space of ``SPACE[:GRIPPER]`` (None = joint_position); ValueError if unknown."""
     try:
-        kw = parse_action_space_flag(action_space)
+        return space_of_keywords(parse_action_space_flag(action_space))
     except ValueError as e:
         raise ValueError(f"--action-space: {e}") from None
-    return make_action_space(kw.get("action_space", "joint_position"), kw.get("gripper_action_space"))
 
 
 class BaselinePolicy(Policy):
