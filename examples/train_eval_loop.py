@@ -392,20 +392,28 @@ def write_summary(summary: dict, path: Path) -> str:
 
 def parse(argv=None) -> Recipe:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Recipe.out)
+    from realm_ms.validate import InputError, check_device, check_output_dir, integer
+
+    # every flag is checked here, before any stage runs (a bad one used to surface after hours of work)
+    ap.add_argument("--out", type=Path, default=Recipe.out, help="output directory (default outputs/train_eval)")
     ap.add_argument("--device", default="cpu", help="torch device for training and the policy: cpu | cuda")
-    ap.add_argument("--threads", type=int, default=None, help="torch CPU threads for training (default: all cores)")
-    ap.add_argument("--steps", type=int, default=None, help="training steps (default 2000; --quick 2)")
-    ap.add_argument("--workers", type=int, default=None, help="parallel env processes for realm eval (default 2)")
-    ap.add_argument("--batch-size", type=int, default=None, help="training batch size (default 16)")
+    ap.add_argument("--threads", type=integer(1), default=None, help="torch CPU threads for training (default: all cores)")
+    ap.add_argument("--steps", type=integer(1), default=None, help="training steps (default 2000; --quick 2)")
+    ap.add_argument("--workers", type=integer(1), default=None, help="parallel env processes for realm eval (default 2)")
+    ap.add_argument("--batch-size", type=integer(1), default=None, help="training batch size (default 16)")
     ap.add_argument("--camera-size", default=None, metavar="WxH",
                     help="camera size of the demos, training and eval (default 64x48; 128x96 localises better, ~4x the compute)")
-    ap.add_argument("--loader-workers", type=int, default=None,
+    ap.add_argument("--loader-workers", type=integer(0), default=None,
                     help="data-loader processes for training (default: 0 on cpu, all cores but 2 on cuda)")
     ap.add_argument("--demos", default=None, metavar="N,N",
                     help="expert demonstrations per task, one count per task (default 60,40)")
     ap.add_argument("--quick", action="store_true", help="CI: every stage with a handful of steps (no success expected)")
     a = ap.parse_args(argv)
+    try:
+        check_device(a.device)
+        check_output_dir(a.out, "--out")
+    except InputError as e:
+        ap.error(str(e))
     from realm_ms.errors import UserError
     from realm_ms.eval.cli import parse_camera_size  # the check `realm eval --camera-size` applies
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 from pathlib import Path
 from typing import Any, Callable
 
@@ -188,6 +189,21 @@ def _argtype(check: Callable[[str], Any], name: str) -> Callable[[str], Any]:
 
     parse.__name__ = name  # argparse uses it in "invalid <name> value"
     return parse
+
+
+def check_device(device: str, where: str = "device (--device)") -> str:
+    """A torch device a command can use: ``cpu``, or ``cuda``/``cuda:N`` where a CUDA GPU exists
+    (checked up front: otherwise a run fails in its driver's traceback after hours of work)."""
+    text = str(device)
+    if text != "cpu" and not re.fullmatch(r"cuda(:\d+)?", text):
+        raise InputError(f"{where}: unknown device {device!r}; use cpu or cuda")
+    if text.startswith("cuda"):
+        import torch
+
+        if not torch.cuda.is_available():
+            raise InputError(f"--device {text}: no CUDA GPU is available here (torch.cuda.is_available() is False); "
+                             "use --device cpu or leave --device out")
+    return text
 
 
 def positive(unit: str = "") -> Callable[[str], float]:

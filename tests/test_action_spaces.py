@@ -249,3 +249,83 @@ def test_eval_flag_reaches_the_env_keywords_with_clear_errors():
     assert policy_action_space(zero, {}) == {}
     with pytest.raises(UserError, match="--action-space: unknown action_space 'nope'"):
         policy_action_space(zero, {"action_space": "nope"})
+
+
+@pytest.mark.parametrize("kw", [dict(action_space="joint_velocity", control_mode="pd_joint_delta_pos"),
+                                dict(action_space="cartesian_position", control_mode="pd_ee_delta_pose"),
+                                dict(gripper_action_space="velocity", control_mode="pd_joint_pos")])
+def test_droid_spaces_need_the_droid_controller(kw):
+    """A zero joint velocity under pd_joint_delta_pos used to move the arm 3 cm: refused before the scene is built."""
+    import gymnasium as gym
+
+    import realm_ms  # noqa: F401
+    from realm_ms.tasks import RealmEnvConfig
+
+    with pytest.raises(ValueError, match=r"is DROID's and needs control_mode='droid_joint_pos' \(got 'pd_"):
+        gym.make("REALM-PickApple-v1", obs_mode="state", **kw)
+    with pytest.raises(ValueError, match="needs control_mode='droid_joint_pos'"):
+        RealmEnvConfig(task="REALM-PickApple-v1", **kw)
+    RealmEnvConfig(task="REALM-PickApple-v1", control_mode=kw["control_mode"])  # joint_position: ManiSkill's modes stay open
+
+
+def _joint_path(env, chunk) -> float:
+    u = env.unwrapped
+    q0 = u.agent.arm_qpos[0].double().numpy().copy()
+    path, q = 0.0, q0
+    for a in chunk:
+        env.step(torch.as_tensor(a))
+        q1 = u.agent.arm_qpos[0].double().numpy()
+        path, q = path + float(np.abs(q1 - q).sum()), q1.copy()
+    return path
+
+
+@pytest.mark.parametrize("space", ["joint_velocity", "cartesian_position"])
+def test_baselines_act_in_the_env_space(envs, space):
+    """`realm eval --policy zero --action-space joint_velocity:position` used to read the absolute
+    targets as velocities (0.74 rad of joint path in 8 steps): the baselines emit the env's space."""
+    from realm_ms.eval.policies import PolicyInput, make_policy
+
+    env = envs[space]
+    env.reset(seed=0)
+    sp = env.unwrapped.droid_action_space
+    lo, hi = sp.bounds()
+
+    def chunk(name, **kw):
+        state = env.unwrapped.agent.droid_state().double().numpy().astype(np.float32)
+        out = make_policy(name, action_space=f"{sp.action_space}:{sp.gripper}", **kw).act(PolicyInput(state, ["x"]))
+        assert out.actions.shape == (1, 8, sp.dim)
+        assert np.all(out.actions >= lo - 1e-6) and np.all(out.actions <= hi + 1e-6)
+        return out.actions[0]
+
+    zero = chunk("zero")
+    if space == "joint_velocity":
+        assert np.all(zero == 0)  # zero motion: zero velocities, gripper velocity 0
+    assert _joint_path(env, zero) < 0.03  # the bug: 0.74 rad
+    env.reset(seed=0)
+    q0 = env.unwrapped.agent.arm_qpos[0].double().numpy().copy()
+    walk = chunk("random", seed=3)
+    ref = make_policy("random", seed=3).act(PolicyInput(np.concatenate([q0, [0.0]])[None].astype(np.float32), ["x"])).actions[0]
+    _joint_path(env, walk)  # the same random walk of targets, asked for in this space
+    q8 = env.unwrapped.agent.arm_qpos[0].double().numpy()
+    assert np.abs(q8 - ref[-1, :7]).max() < 0.06, (q8, ref[-1, :7])
+    with pytest.raises(ValueError, match="--action-space: unknown action_space 'joint_vel'"):
+        make_policy("zero", action_space="joint_vel")
+
+
+def test_a_finite_huge_action_is_outside_the_space_not_nan(envs):
+    """1e39 is finite: it used to be refused as "NaN or Inf" (it overflows float32)."""
+    import warnings
+
+    u = envs["joint_position"].unwrapped
+    a = np.array([1e39, -0.6, 0.0, -2.4, 0.0, 1.9, 0.0, 0.0])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        t = u._checked_action(a)
+    assert float(t.reshape(-1)[0]) == pytest.approx(2.8973, abs=1e-4) and t.dtype == torch.float32
+    assert any("outside the action space" in str(w.message) for w in caught) or "0" in u._action_warned
+    v = envs["joint_velocity"].unwrapped
+    q = v.agent.arm_qpos[0].double().numpy()
+    t = v._checked_action(np.array([1e39, 0, 0, 0, 0, 0, 0, 0.0]))[0].double().numpy()
+    assert t[0] == pytest.approx(min(q[0] + 0.2, 2.8973), abs=1e-5) and np.allclose(t[1:7], q[1:7], atol=1e-5)
+    with pytest.raises(ValueError, match="NaN or Inf"):
+        u._checked_action(np.array([np.inf, 0, 0, 0, 0, 0, 0, 0.0]))

@@ -153,3 +153,34 @@ def test_gain_presets_change_the_loop():
     e.close()
     with pytest.raises(ValueError, match="unknown gain preset"):
         make(droid_control=dict(gains="nope"))
+
+
+def test_per_joint_settings_of_the_wrong_length_are_one_line():
+    """`droid_control={"effort_limits": [87, 87, 87]}` used to end in numpy's broadcast message."""
+    import pytest
+
+    from realm_ms.agents.control import DroidControlConfig, ImpedanceGains
+    from realm_ms.tasks import RealmEnvConfig
+
+    with pytest.raises(ValueError, match=r"droid_control\.effort_limits: expected 7 finite numbers \(one per joint\), got 3"):
+        RealmEnvConfig.from_kwargs(None, {"droid_control": {"effort_limits": [87, 87, 87]}})
+    with pytest.raises(ValueError, match=r"droid_control\.reference_qpos: expected 7"):
+        DroidControlConfig(reference_qpos=(0.0, 0.0))
+    with pytest.raises(ValueError, match=r"gains\.kx: expected 6 finite numbers \(one per axis\), got 7"):
+        ImpedanceGains((40,) * 7, (4,) * 7, (750,) * 7, (37,) * 6)
+    with pytest.raises(ValueError, match=r"droid_control\.drive_damping: expected a list of 7 numbers"):
+        DroidControlConfig(drive_damping=[1, 2, "x"])
+    assert DroidControlConfig(effort_limits=[87.0] * 7).effort_limits == [87.0] * 7
+
+
+def test_custom_gains_and_joint_physics_as_mappings():
+    """A mapping for `gains` / `joint_physics` names the fields it lacks; a scalar field stays a scalar."""
+    import pytest
+
+    from realm_ms.tasks.config import _control_fields
+
+    jp = _control_fields({"joint_physics": {"friction": [0.1] * 7, "armature": [0.0] * 7, "friction_velocity": 0.05}})
+    assert jp["joint_physics"].friction_velocity == 0.05 and jp["joint_physics"].friction == (0.1,) * 7
+    with pytest.raises(ValueError, match=r"droid_control\.joint_physics: expected the fields friction, armature "
+                                         r"\(optional: friction_velocity\), got \['friction'\]"):
+        _control_fields({"joint_physics": {"friction": [0.1] * 7}})

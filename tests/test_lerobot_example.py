@@ -80,8 +80,11 @@ def test_fine_tuning_skips_what_a_language_blind_policy_cannot_observe():
 
 
 def test_recipe_loads_data_in_the_trainer_on_cpu_and_in_loader_processes_on_a_gpu(monkeypatch):
+    import torch
+
     ex = _example()
     monkeypatch.setattr(ex.os, "cpu_count", lambda: 16)
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)  # the GPU machine's answer
     assert ex.parse([]).dataloader_workers() == 0
     gpu = ex.parse(["--device", "cuda", "--batch-size", "64"])
     assert (gpu.dataloader_workers(), gpu.batch_size) == (14, 64)
@@ -112,3 +115,30 @@ def test_recipe_demo_counts_are_one_per_task(capsys):
         with pytest.raises(SystemExit):
             ex.parse(["--demos", bad])
         assert why in capsys.readouterr().err
+
+
+def test_recipe_flags_are_checked_before_any_stage(tmp_path, capsys, monkeypatch):
+    """`--steps -1` used to traceback, and `--device cuda` without a GPU failed in LeRobot's driver
+    after the demo and training stages: each is one line at parse time, before anything runs."""
+    import pytest
+    import torch
+
+    ex = _example()
+    (tmp_path / "afile").write_text("x")
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    for argv, why in ((["--steps", "-1"], "argument --steps: must be >= 1, got -1"),
+                      (["--steps", "1.5"], "argument --steps: expected an integer"),
+                      (["--batch-size", "0"], "argument --batch-size: must be >= 1"),
+                      (["--workers", "0"], "argument --workers: must be >= 1"),
+                      (["--threads", "0"], "argument --threads: must be >= 1"),
+                      (["--loader-workers", "-1"], "argument --loader-workers: must be >= 0"),
+                      (["--out", str(tmp_path / "afile")], "afile exists and is a file; give a directory"),
+                      (["--out", str(tmp_path / "afile" / "sub")], "is a file"),
+                      (["--device", "cuda"], "--device cuda: no CUDA GPU is available here"),
+                      (["--device", "cuda:x"], "unknown device 'cuda:x'")):
+        with pytest.raises(SystemExit) as e:
+            ex.main(argv)
+        err = capsys.readouterr()
+        assert e.value.code == 2 and why in err.err.strip().splitlines()[-1], (argv, err.err)
+        assert "===" not in err.out  # no stage started
+    assert not (tmp_path / "afile").is_dir()

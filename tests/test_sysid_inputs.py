@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -116,3 +117,45 @@ def test_torque_logs_without_q_cmd_load_for_torque_space(tmp_path):
     (tr,) = read_lerobot(tmp_path / "ds")
     assert tr.q_cmd is None and tr.tau.shape == (150, 7) and np.allclose(tr.tau, 0.5)
     assert len(load_dir(tmp_path / "ds")) == 1
+
+
+def _torque_log(d, rate=1000.0, n=3, flat_joint=None):
+    d.mkdir(parents=True, exist_ok=True)
+    t = np.arange(int(4 * rate)) / rate
+    for i in range(n):
+        q = POSE + 0.2 * np.sin(2 * np.pi * 0.5 * t[:, None] + i)
+        tau = np.random.default_rng(i).normal(size=(len(t), 7))
+        if flat_joint is not None:
+            tau[:, flat_joint] = 0.0
+        np.savez(d / f"traj_{i}.npz", t=t, q=q, tau=tau)
+    return d
+
+
+@pytest.mark.parametrize("verb", ["diagnose", "auto", "fit"])
+def test_nothing_to_identify_is_never_a_verdict(verb, tmp_path, capsys):
+    """An arm that never moves, or a torque column of zeros, used to get a confident "partially
+    explained by link_mass"; it is one line saying there is nothing to identify."""
+    still = _write(tmp_path / "still", np.arange(300) / 15.0, control_hz=15.0, n=3)
+    flat = _torque_log(tmp_path / "flat", flat_joint=2)
+    extra = {"fit": ["--add", "coulomb_friction", "--out", str(tmp_path / "m.yaml")], "auto": ["--out", str(tmp_path / "m.yaml")]}
+    for data, msg in ((still, "nothing to identify: the arm never moves"),
+                      (flat, r"nothing to identify in torque space: tau of joint\(s\) 3 is 0 N·m throughout")):
+        code = main(["sysid", verb, str(data), "--workers", "1", "--device", "cpu", *extra.get(verb, [])])
+        err = capsys.readouterr().err
+        assert code == 2 and "Traceback" not in err, err
+        assert re.search(msg, err.strip().splitlines()[-1]), err
+        assert not (tmp_path / "m.yaml").exists()
+
+
+def test_torque_logs_below_100_hz_are_refused_with_the_reason(tmp_path, capsys):
+    """A 15 Hz torque log used to be read like a 1 kHz one (a "> 10 Hz" band above its Nyquist limit)."""
+    from realm_ms.sysid.data_io import load_dir
+    from realm_ms.sysid.timeseries import DataError, check_torque_rate
+
+    slow = _torque_log(tmp_path / "slow", rate=15.0)
+    code = main(["sysid", "compare", str(slow), "--space", "torque", "--workers", "1", "--device", "cpu"])
+    err = capsys.readouterr().err
+    assert code == 2 and "logged at 15 Hz; torque-space work needs >= 100 Hz" in err and "Nyquist limit is 7.5 Hz" in err
+    check_torque_rate(load_dir(_torque_log(tmp_path / "ok", rate=100.0, n=1))[0])  # 100 Hz is enough
+    with pytest.raises(DataError, match="logged at 50 Hz"):
+        check_torque_rate(load_dir(_torque_log(tmp_path / "half", rate=50.0, n=1))[0])

@@ -24,3 +24,17 @@ def test_noise_floor_of_white_noise_on_smooth_motion():
     res = np.where(ss.mask[..., None], ss.meas - q[ss.sample_idx.clip(0)], np.nan)
     sigma, per_joint = noise_floor(ss, res)
     assert abs(sigma - 3e-4) < 0.4e-4 and per_joint.shape == (7,)
+
+
+def test_evidence_never_divides_by_a_zero_rms():
+    """A joint with residual only in holds (move_rms 0) used to read "hold/move rms 300000000.00"."""
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.sysid.signatures import Features
+
+    z = np.zeros(7)
+    rms = np.full(7, 3e-4)
+    f = Features(z, z, np.full(7, 0.5), z, z, z, z, z, rms, z, z)
+    text = f.sentence_for(make_effect("armature"), {})
+    assert "hold/move rms n/a" in text
+    f = Features(z, z, z, z, z, z, np.full(7, 1e-4), rms, rms, rms, z)
+    assert "mean/rms 0.33" in f.sentence_for(make_effect("encoder_bias"), {})

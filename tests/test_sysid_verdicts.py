@@ -53,6 +53,19 @@ def test_torque_space_has_no_replay_floor():
     assert floor == pytest.approx(0.073) and v == "found" and "N·m" in msg
 
 
+@pytest.mark.parametrize("after", [0.5, 0.9])  # partially explained / unexplained
+def test_a_zero_floor_is_never_divided(after):
+    """Noise-free torque data has a floor of 0: no "6.8e29x the floor" in any message."""
+    from realm_ms.sysid.auto import AutoStep, _message
+
+    v, msg, floor = judge_verdict(1.0, 0.0, [_s("coulomb_friction", 1.0, after)], CFG, unit="N·m")
+    assert floor == 0 and v in ("partially_explained", "unexplained")
+    assert "x the floor" not in msg and "floor of 0 N·m: noise-free data, no ratio" in msg
+    for verdict in ("partially_explained", "unexplained"):
+        m = _message(verdict, 1.0, after, 0.0, [AutoStep("coulomb_friction", {}, after, True, "")])
+        assert "x the floor" not in m and "no ratio" in m
+
+
 def test_friction_curve_of_a_model():
     from realm_ms.agents.effects import make_effect
     from realm_ms.agents.robot_model import RobotModel

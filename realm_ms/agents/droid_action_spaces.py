@@ -62,6 +62,24 @@ def check_action_space(action_space: str, gripper_action_space: str | None) -> N
                          f"(or None: DROID's default, velocity for the velocity spaces)")
 
 
+#: the controller DROID's spaces are converted for (ManiSkill's pd_* modes read actions their own way)
+DROID_CONTROL_MODE = "droid_joint_pos"
+
+
+def check_control_mode(action_space: str, gripper_action_space: str | None, control_mode: str | None) -> None:
+    """ValueError when a DROID action space other than joint_position (+ position gripper) meets a
+    control mode other than ``droid_joint_pos`` (None = the env's default, droid_joint_pos): its
+    conversion produces droid_joint_pos targets, which e.g. pd_joint_delta_pos would read as deltas."""
+    if control_mode in (None, DROID_CONTROL_MODE):
+        return
+    if action_space == "joint_position" and gripper_action_space in (None, "position"):
+        return
+    space = action_space + (f":{gripper_action_space}" if gripper_action_space else "")
+    raise ValueError(f"action_space {space!r} is DROID's and needs control_mode={DROID_CONTROL_MODE!r} (got "
+                     f"{control_mode!r}); leave control_mode out, or use action_space='joint_position' with "
+                     f"ManiSkill's modes")
+
+
 def resolve_gripper_space(action_space: str, gripper_action_space: str | None) -> str:
     """DROID's default: ``velocity`` if the arm space is a velocity space, else ``position``."""
     if gripper_action_space is not None:
@@ -344,10 +362,15 @@ def parse_action_space_flag(text: str | None) -> dict:
     return {"action_space": space} | ({"gripper_action_space": grip} if grip else {})
 
 
+def space_of_keywords(env_kwargs: dict | None) -> DroidActionSpace:
+    """The action space env keywords (``action_space``, ``gripper_action_space``) describe."""
+    kw = env_kwargs or {}
+    return make_action_space(kw.get("action_space", "joint_position"), kw.get("gripper_action_space"))
+
+
 def action_space_name(env_kwargs: dict | None) -> str:
     """``SPACE:GRIPPER`` (resolved, e.g. ``joint_velocity:velocity``) of env keywords: records name it."""
-    kw = env_kwargs or {}
-    space = make_action_space(kw.get("action_space", "joint_position"), kw.get("gripper_action_space"))
+    space = space_of_keywords(env_kwargs)
     return f"{space.action_space}:{space.gripper}"
 
 

@@ -25,22 +25,30 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from realm_ms.agents.actuation import ActuationModel
 from realm_ms.agents.effects import Effect, effect_class, make_effect
 
 FORMAT_VERSION = 1
 #: the benchmark's policy rate; physics must run a whole number of steps per control step
 CONTROL_HZ = 15
+#: physics rates accepted: 60 Hz (4 steps per control step) to 2 kHz (133); the envs default to
+#: 120 Hz, and a rate such as 1.5 MHz, a multiple of 15, would take hours per control step (a hang)
+PHYSICS_HZ_RANGE = (60.0, 2000.0)
 
 
 def check_physics_hz(value: Any, where: str = "physics_hz") -> float:
-    """A physics rate in Hz: a finite positive multiple of the 15 Hz control rate (e.g. 120)."""
+    """A physics rate in Hz: a multiple of the 15 Hz control rate (e.g. 120) within ``PHYSICS_HZ_RANGE``."""
     try:
         hz = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{where}: expected a number in Hz, got {value!r}") from None
     if not math.isfinite(hz) or hz <= 0:
         raise ValueError(f"{where}: must be a positive number of Hz, got {value!r}")
+    lo, hi = PHYSICS_HZ_RANGE
+    if not lo <= hz <= hi:
+        raise ValueError(f"{where}: {hz:g} Hz is outside the supported {lo:g}-{hi:g} Hz (e.g. 120, 240, 480)")
     steps = hz / CONTROL_HZ
     if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
         raise ValueError(f"{where}: {hz:g} Hz is not a whole multiple of the {CONTROL_HZ} Hz control rate "
@@ -75,6 +83,67 @@ def check_settings(effect: Effect, where: str) -> None:
                 raise ValueError(f"{where}.{f.name}: must be > 0 {unit} (a tanh width), got {v!r}")
 
 
+def check_effects(effects: list[Effect], where: str, labels: list[str] | None = None) -> None:
+    """The one validation of an effect list, for the loader, ``RobotModel`` and ``--add``/``--hidden``:
+    each effect's settings (``check_settings``) and no effect twice (both would be applied)."""
+    seen: dict[str, str] = {}
+    for i, e in enumerate(effects):
+        label = labels[i] if labels else e.name
+        check_settings(e, f"{where}{label}.config")
+        if e.name in seen:
+            if seen[e.name] == label:  # named by the effect alone (a spec on the command line)
+                raise ValueError(f"{where}effect {e.name!r} given twice; give it once")
+            raise ValueError(f"{where}{label}: effect {e.name!r} given twice (also {seen[e.name]}); give it once")
+        seen[e.name] = label
+
+
+# other spellings of the units the effects use, as (unit, factor to it); anything else is refused
+_UNIT_SPELLINGS = {"N·m": {"Nm": 1.0, "N m": 1.0, "N*m": 1.0, "N.m": 1.0, "mN·m": 1e-3, "mNm": 1e-3, "mN m": 1e-3,
+                           "mN*m": 1e-3, "kN·m": 1e3},
+                   "rad": {"mrad": 1e-3, "deg": math.pi / 180, "°": math.pi / 180},
+                   "rad/s": {"mrad/s": 1e-3, "deg/s": math.pi / 180},
+                   "kg": {"g": 1e-3}, "s": {"ms": 1e-3}, "m": {"mm": 1e-3, "cm": 1e-2},
+                   "kg·m²": {"kg m^2": 1.0, "kg*m^2": 1.0, "kg·m^2": 1.0, "kgm^2": 1.0}}
+
+
+def unit_factor(given: Any, unit: str, where: str) -> float:
+    """The factor that turns a value in ``given`` into ``unit`` (1 for the same unit); ValueError for
+    a unit that is not a known spelling or scale of ``unit``."""
+    text = str(given).strip()
+    if text == unit:
+        return 1.0
+    factor = _UNIT_SPELLINGS.get(unit, {}).get(text)
+    if factor is None:
+        raise ValueError(f"{where}: {text!r} is not {unit} and cannot be converted to it; write the values in {unit}")
+    return factor
+
+
+def _convert_units(name: str, params: dict, config: dict, units: Any, where: str) -> dict:
+    """``params`` in the units the effect declares: ``units: {fc: mN·m}`` scales every fc value."""
+    if units is None:
+        return params
+    if not isinstance(units, dict):
+        raise ValueError(f"{where}: expected a mapping of parameter -> unit, got {units!r}")
+    effect = make_effect(name, None, config)
+    specs = {s.name: s for s in effect.specs}
+    spec_of = {p.local_key: p.spec.name for p in effect.params} | {n: n for n in specs}  # fc4 -> fc
+    factors = {}
+    for key, given in units.items():
+        if key not in specs:
+            raise ValueError(f"{where}.{key}: effect {name!r} has no parameter {key!r}; it has {', '.join(specs)}")
+        factors[key] = unit_factor(given, specs[key].unit, f"{where}.{key}")
+    out = {}
+    for key, v in params.items():
+        f = factors.get(spec_of.get(key), 1.0)
+        if f != 1.0 and not isinstance(v, bool):
+            try:
+                v = (np.asarray(v, dtype=float) * f).tolist()
+            except (TypeError, ValueError):
+                pass  # not numeric: set_values names it
+        out[key] = v
+    return out
+
+
 @dataclass
 class RobotModel:
     effects: list[Effect] = field(default_factory=list)
@@ -85,6 +154,7 @@ class RobotModel:
 
     def __post_init__(self) -> None:
         self.physics_hz = check_physics_hz(self.physics_hz)
+        check_effects(self.effects, "effects: ")
 
     def actuation(self) -> ActuationModel:
         """Stages in canonical order (measure/command first, friction last)."""
@@ -154,11 +224,14 @@ class RobotModel:
                     raise ValueError(f"{where}: effects[{i}].{key}: expected a mapping, got {item[key]!r}")
             try:
                 effect_class(item["name"])
-                effects.append(make_effect(item["name"], item.get("params") or {}, item.get("config") or {}))
+                config = item.get("config") or {}
+                params = _convert_units(item["name"], item.get("params") or {}, config, item.get("units"),
+                                        "units")
+                effects.append(make_effect(item["name"], params, config))
             except (KeyError, ValueError, TypeError) as e:
                 msg = e.args[0] if isinstance(e, KeyError) and e.args else e
                 raise ValueError(f"{where}: effects[{i}]: {msg}") from None
-            check_settings(effects[-1], f"{where}: effects[{i}].config")
+        check_effects(effects, f"{where}: ", [f"effects[{i}]" for i in range(len(effects))])
         from realm_ms.agents.control.presets import GAIN_PRESETS, JOINT_PHYSICS_PRESETS
 
         presets = {}
@@ -178,6 +251,7 @@ class RobotModel:
         import yaml
 
         path = Path(path)
+        RobotModel.from_dict(self.to_dict(), str(path))  # never write a file the loader would refuse
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(path.suffix + ".tmp")
         tmp.write_text(yaml.safe_dump(self.to_dict(), sort_keys=False, allow_unicode=True))

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from realm_ms.sysid.timeseries import MIN_SAMPLES, DataError, Trajectory
-from realm_ms.validate import InputError, check_int, check_non_negative, check_positive
+from realm_ms.validate import InputError, check_device, check_int, check_non_negative, check_positive
 
 #: shortest synthetic trajectory the other verbs accept: 1 s burn-in plus at least 1 s scored
 MIN_SYNTH_DURATION_S = 2.0
@@ -51,6 +51,15 @@ def _space(trajs: list[Trajectory], space: str | None) -> str:
     return space
 
 
+def _checked_space(trajs: list[Trajectory], space: str | None) -> str:
+    """``_space``, for the verbs that reach a verdict or fit: data with nothing to identify is refused."""
+    from realm_ms.sysid.timeseries import check_identifiable
+
+    space = _space(trajs, space)
+    check_identifiable(trajs, space)
+    return space
+
+
 def _model(model):
     from realm_ms.agents.robot_model import RobotModel
 
@@ -63,14 +72,7 @@ def _evaluator(model, workers=None, device=None, progress: bool = True):
     if workers is not None:
         workers = check_int(workers, "workers (--workers)", minimum=1)
     if device is not None:
-        if device not in ("cpu", "cuda") and not str(device).startswith("cuda:"):
-            raise InputError(f"device (--device): unknown device {device!r}; use cpu or cuda")
-        if str(device).startswith("cuda"):
-            import torch
-
-            if not torch.cuda.is_available():
-                raise InputError("--device cuda: no CUDA GPU is available here (torch.cuda.is_available() is False); "
-                                 "use --device cpu or leave --device out")
+        check_device(device)
 
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.simulator import SimConfig
@@ -152,7 +154,7 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
 
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, space) == "torque":
+    if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
         cands = config.pop("candidates", None)
@@ -184,7 +186,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, space) == "torque":
+    if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
         j = verbs.fit(train, held, add, m, refit=config.get("refit", True), log=log)
@@ -226,7 +228,7 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
         check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, space) == "torque":
+    if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
         res = verbs.auto(train, held, m, AutoConfig(seed=seed, **config), log)
@@ -254,7 +256,7 @@ def report(data, model=None, out: str | Path = "report.html", heldout=None, seed
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed)
     m = _model(model)
-    if _space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
+    if _checked_space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
         from realm_ms.sysid.report.torque_report import build_torque_report
 
         auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")

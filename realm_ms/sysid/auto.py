@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.robot_model import RobotModel
-from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, diagnose, judging_floor, unscreened, unscreened_note
+from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, diagnose, judging_floor, times_floor, unscreened, unscreened_note
 from realm_ms.sysid.fit import FitConfig, fit
 from realm_ms.sysid.timeseries import Trajectory
 
@@ -210,10 +210,10 @@ def _message(verdict: str, nominal: float, final: float, floor: float, kept: lis
     if verdict == "partially_explained":
         share = 1 - max(final**2 - floor**2, 0) / max(nominal**2 - floor**2, 1e-30)
         return (f"partially explained ({100 * share:.0f}% of the model error): {chain}; residual {final:.2e} rad "
-                f"left ({final / floor:.1f}x the floor): {outside}, or a plant/controller mismatch"
+                f"left ({times_floor(final, floor)}): {outside}, or a plant/controller mismatch"
                 + unscreened_note(left_out) + bounds_note(at_bounds or {}))
     return (f"unexplained: no screened effect lowers the held-out RMSE {nominal:.2e} rad "
-            f"({nominal / floor:.1f}x the floor {floor:.2e} rad)" + unscreened_note(left_out))
+            f"({times_floor(nominal, floor)})" + unscreened_note(left_out))
 
 
 class _NoBar:

@@ -27,6 +27,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import math
+
 import numpy as np
 
 from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
@@ -245,6 +247,14 @@ def judging_floor(noise_floor: float, replay_floor: float) -> float:
     return float(np.hypot(noise_floor, replay_floor))
 
 
+def times_floor(value: float, floor: float, unit: str = "rad") -> str:
+    """``value`` against ``floor``: "3.2x the floor 1.00e-03 rad", or, for a floor of 0 (noise-free
+    data), that there is no ratio: a zero floor is never divided into a ratio of 1e29."""
+    if floor > 0:
+        return f"{value / floor:.1f}x the floor {floor:.2e} {unit}"
+    return f"above a floor of 0 {unit}: noise-free data, no ratio"
+
+
 def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg: DiagnoseConfig,
                   unit: str = "rad", left_out: list[str] = ()) -> tuple[str, str, float]:
     """(verdict, message, judging floor) for a baseline held-out RMSE and ranked suspects; fills
@@ -257,7 +267,7 @@ def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg:
         sp.explains = float(np.clip((base**2 - sp.heldout_rmse_after_rad**2) / excess, 0.0, 1.0))
     best = suspects[0] if suspects else None
     f = lambda v: f"{v:.2e} {unit}"  # noqa: E731
-    ratio = base / max(floor, 1e-30)
+    ratio = base / floor if floor > 0 else math.inf
     if base <= cfg.found_factor * floor:
         return "no_missing_effect", (f"no missing effect: held-out RMSE {f(base)} is within {cfg.found_factor:g}x the "
                                      f"floor {f(floor)} (noise {f(noise_floor)})"), floor
@@ -272,17 +282,17 @@ def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg:
         left = best.heldout_rmse_after_rad
         return "partially_explained", (
             f"partially explained: {100 * best.explains:.0f}% of the model error by {best.effect} (held-out RMSE "
-            f"{f(base)} -> {f(left)}), residual {f(left)} left ({left / max(floor, 1e-30):.1f}x the floor "
-            f"{f(floor)}); next suspects: {', '.join(nxt) if nxt else none}. Fit {best.effect}, "
+            f"{f(base)} -> {f(left)}), residual {f(left)} left ({times_floor(left, floor, unit)});"
+            f" next suspects: {', '.join(nxt) if nxt else none}. Fit {best.effect}, "
             "then diagnose again with --model (or run `realm sysid auto`)" + unscreened_note(left_out)), floor
     if ratio <= cfg.unexplained_factor:
-        return "no_missing_effect", (f"no missing effect found: held-out RMSE {f(base)} is {ratio:.1f}x the floor "
-                                     f"{f(floor)} and the best candidate ({best.effect if best else '-'}) removes only "
+        return "no_missing_effect", (f"no missing effect found: held-out RMSE {f(base)} is {times_floor(base, floor, unit)} "
+                                     f"and the best candidate ({best.effect if best else '-'}) removes only "
                                      f"{100 * (best.score if best else 0):.0f}% of it"), floor
     shares = ", ".join(f"{sp.effect} {100 * sp.explains:.0f}%" for sp in suspects[:3])
     which = "no screened effect" if left_out else "no effect in the library"
     return "unexplained", (f"unexplained: {which} explains the residual (held-out RMSE {f(base)}, "
-                           f"{ratio:.1f}x the floor {f(floor)}); share of the model error each candidate explains: "
+                           f"{times_floor(base, floor, unit)}); share of the model error each candidate explains: "
                            f"{shares}. A structural mismatch (plant, controller or data) is likely"
                            + unscreened_note(left_out)), floor
 

@@ -11,6 +11,7 @@ from dataclasses import fields
 from typing import Literal
 
 from realm_ms.agents.effects import EFFECTS, Effect, effect_class, make_effect
+from realm_ms.agents.robot_model import check_effects
 
 
 def _value(text: str, key: str = "value"):
@@ -73,7 +74,6 @@ def parse_effects(text: str, default_values: Literal["off", "nominal"] = "off") 
             fx.set_values(values)
         except (KeyError, ValueError) as e:
             raise ValueError(e.args[0] if e.args else str(e)) from None
-        if any(n == name for n, _ in [(f.name, 0) for f in out]):
-            raise ValueError(f"effect {name!r} given twice")
         out.append(fx)
+    check_effects(out, "")  # what a MODEL.yaml's loader checks: fit never writes a file it refuses
     return out

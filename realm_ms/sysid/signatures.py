@@ -112,7 +112,9 @@ def compute(segset, sim_q: np.ndarray, gravity: np.ndarray | None = None) -> Fea
         if moving.sum() > 10:
             med = np.median(speed[moving])
             slow, fast = moving & (speed <= med), moving & (speed > med)
-            out["slow_fast"][j] = np.sqrt(np.mean(r[slow] ** 2)) / max(np.sqrt(np.mean(r[fast] ** 2)), 1e-12)
+            fast_rms = np.sqrt(np.mean(r[fast] ** 2))
+            # no residual at speed: no ratio (0, as for a joint that hardly moves), never x / 1e-12
+            out["slow_fast"][j] = np.sqrt(np.mean(r[slow] ** 2)) / fast_rms if fast_rms > 0 else 0.0
         out["mean"][j] = r.mean()
         out["rms"][j] = np.sqrt(np.mean(r**2))
         out["hold_rms"][j] = np.sqrt(np.mean(r[~moving] ** 2)) if (~moving).sum() > 3 else 0.0
@@ -123,6 +125,11 @@ def compute(segset, sim_q: np.ndarray, gravity: np.ndarray | None = None) -> Fea
 
 def _j(i: int) -> str:
     return f"joint {i + 1}"
+
+
+def _ratio(a: float, b: float) -> str:
+    """a / b to 2 decimals, or "n/a" where b is 0 (a zero is never divided into a huge number)."""
+    return f"{a / b:.2f}" if b > 0 else "n/a"
 
 
 def _top(arr: np.ndarray, feats: Features) -> int:
@@ -163,7 +170,7 @@ def _lugre(f, fx, v, size):
 def _armature(f, fx, v, size):
     j = _top(f.corr_acc, f)
     return (f"residual follows acceleration (corr {f.corr_acc[j]:+.2f} with q̈ on {_j(j)}) and vanishes in holds "
-            f"(hold/move rms {f.hold_rms[j] / max(f.move_rms[j], 1e-12):.2f}) → armature, {size}")
+            f"(hold/move rms {_ratio(f.hold_rms[j], f.move_rms[j])}) → armature, {size}")
 
 
 def _payload(f, fx, v, size):
@@ -206,7 +213,7 @@ def _backlash(f, fx, v, size):
 def _bias(f, fx, v, size):
     j = int(np.argmax(np.abs(f.mean)))
     return (f"constant offset {format_value(-f.mean[j], 'rad')} on {_j(j)} in holds and in motion "
-            f"(mean/rms {abs(f.mean[j]) / max(f.rms[j], 1e-12):.2f}) → encoder bias, {size}")
+            f"(mean/rms {_ratio(abs(f.mean[j]), f.rms[j])}) → encoder bias, {size}")
 
 
 SENTENCES: dict[str, Callable] = {

@@ -19,6 +19,11 @@ MIN_DURATION_S = 1.0
 MIN_RATE_HZ = 5.0  # slower logs cannot resolve the 15 Hz commands; a median step of 1 is frame indices
 MAX_GAP_S = 1.0  # a longer jump in `t` (and > GAP_FACTOR x the median step) is a gap in the recording
 GAP_FACTOR = 20.0
+# Torque space differentiates q twice and smooths over ~50 ms (torque/smoothing.py): at DROID's
+# 15 Hz a window holds < 1 sample, q̈ is a difference of command steps, and the 7.5 Hz Nyquist
+# limit lies inside the motion band the residual is split into (torque/spectrum.py, up to > 10 Hz)
+MIN_TORQUE_RATE_HZ = 100.0
+MIN_MOTION_RAD = 1e-3  # peak-to-peak motion of every joint below this in every trajectory: the arm did not move
 
 
 class DataError(InputError):
@@ -65,6 +70,34 @@ def command_grid_drift(t: np.ndarray, control_hz: float | None) -> str | None:
             "mistimed by up to that much (looks like latency). Log at the command times (or a whole multiple "
             "of the command rate), or resample q_cmd onto the true command times"
             + ("" if not assumed else "; set control_hz in the file if the commands are not 15 Hz"))
+
+
+def check_torque_rate(traj: "Trajectory") -> None:
+    """DataError for a torque log slower than ``MIN_TORQUE_RATE_HZ``, saying why."""
+    rate = 1.0 / float(np.median(np.diff(traj.t)))
+    if rate < MIN_TORQUE_RATE_HZ * (1 - 1e-6):  # time stamps in float: 100 Hz reads as 99.99999
+        raise DataError(f"{traj.name}: logged at {rate:.3g} Hz; torque-space work needs >= {MIN_TORQUE_RATE_HZ:g} Hz "
+                        f"(it differentiates q twice and smooths over 50 ms; at {rate:.3g} Hz the Nyquist limit is "
+                        f"{rate / 2:.3g} Hz). Log torques faster, or use --space position (the replay of q_cmd, if the log has it)")
+
+
+def check_identifiable(trajs: list["Trajectory"], space: str) -> None:
+    """DataError "nothing to identify" for data no verdict can come from: an arm that never moves,
+    or (torque space) a joint torque that never varies (a zero column: the sensor was not logged)."""
+    def ptp(a):
+        return np.ptp(a, axis=0) if a is not None and len(a) else np.zeros(7)
+
+    if not any(max(ptp(tr.q).max(), ptp(tr.q_cmd).max()) > MIN_MOTION_RAD for tr in trajs):
+        raise DataError(f"nothing to identify: the arm never moves (every joint's q and q_cmd vary by < "
+                        f"{1e3 * MIN_MOTION_RAD:g} mrad in all {len(trajs)} trajectories); record motion, e.g. the "
+                        "commands of `realm sysid excite`")
+    if space == "torque":
+        flat = [j for j in range(7) if all(ptp(tr.tau)[j] == 0 for tr in trajs)]
+        if flat:
+            value = float(trajs[0].tau[0, flat[0]])
+            raise DataError(f"nothing to identify in torque space: tau of joint(s) {', '.join(str(j + 1) for j in flat)} "
+                            f"is {value:g} N·m throughout every trajectory (not logged?); log the joint torques, or "
+                            "use --space position (the replay of q_cmd)")
 
 
 @dataclass

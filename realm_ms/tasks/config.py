@@ -63,9 +63,10 @@ class RealmEnvConfig:
         _check_int("num_envs", self.num_envs, minimum=1)
         if self.horizon is not None:
             _check_int("horizon (max_episode_steps)", self.horizon, minimum=1)
-        from realm_ms.agents.droid_action_spaces import check_action_space
+        from realm_ms.agents.droid_action_spaces import check_action_space, check_control_mode
 
         check_action_space(self.action_space, self.gripper_action_space)
+        check_control_mode(self.action_space, self.gripper_action_space, self.control_mode)
         if isinstance(self.perturbation, list):
             object.__setattr__(self, "perturbation", tuple(self.perturbation))
         if isinstance(self.robot_model, Path):
@@ -206,10 +207,15 @@ def _control_fields(d: dict) -> dict:
     if unknown:
         raise ValueError(f"unknown droid_control fields {sorted(unknown)}; known: "
                          f"{', '.join(f.name for f in dataclasses.fields(DroidControlConfig))}")
-    if isinstance(d.get("gains"), dict):
-        d["gains"] = ImpedanceGains(**{k: tuple(v) for k, v in d["gains"].items()})
-    if isinstance(d.get("joint_physics"), dict):
-        d["joint_physics"] = JointPhysics(**{k: tuple(v) for k, v in d["joint_physics"].items()})
+    for key, cls in (("gains", ImpedanceGains), ("joint_physics", JointPhysics)):
+        if isinstance(d.get(key), dict):  # lists -> tuples; scalars (friction_velocity) as they are
+            names = [f.name for f in dataclasses.fields(cls)]
+            required = [f.name for f in dataclasses.fields(cls) if f.default is dataclasses.MISSING]
+            if set(d[key]) - set(names) or set(required) - set(d[key]):
+                optional = [n for n in names if n not in required]
+                also = f" (optional: {', '.join(optional)})" if optional else ""
+                raise ValueError(f"droid_control.{key}: expected the fields {', '.join(required)}{also}, got {sorted(d[key])}")
+            d[key] = cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d[key].items()})
     for k, v in list(d.items()):
         if isinstance(v, list):
             d[k] = tuple(v)

@@ -52,6 +52,10 @@ class RealmEnv(BaseEnv):
         """``config`` or its fields as keywords (``camera_width=``, ``shader=``, ``droid_control=``,
         ``robot_model=``, ``perturbation=``, ... see ``RealmEnvConfig``); other keywords go to ManiSkill."""
         config, kwargs = RealmEnvConfig.from_kwargs(config, kwargs)
+        from realm_ms.agents.droid_action_spaces import check_control_mode
+
+        # before the scene is built: DROID's spaces convert to droid_joint_pos targets only
+        check_control_mode(config.action_space, config.gripper_action_space, kwargs.get("control_mode"))
         self.robot_model = None
         if config.robot_model is not None:  # an identified model: its effects and the presets it was fitted on
             from realm_ms.agents.robot_model import load_robot_model
@@ -351,7 +355,7 @@ class RealmEnv(BaseEnv):
         """Validate an action before ManiSkill sees it.
 
         Rejected (``ValueError``): a shape other than (action_dim,) or (num_envs, action_dim), NaN or
-        Inf, anything not numeric. Clipped to the action space with one warning per env and kind:
+        Inf, anything not numeric (a finite value beyond float32, 1e39, is a value outside the space). Clipped to the action space with one warning per env and kind:
         joint targets beyond the joint limits, a gripper command outside [0, 1] (the robot cannot do
         more; a policy's small overshoot is normal).
         """
@@ -359,15 +363,21 @@ class RealmEnv(BaseEnv):
             return action
         space = self.single_action_space
         try:
-            a = torch.as_tensor(np.asarray(action, dtype=np.float32) if not isinstance(action, torch.Tensor) else action,
-                                dtype=torch.float32, device=self.device)
+            with np.errstate(over="ignore"):  # a finite value beyond float32 becomes inf: handled below
+                a = torch.as_tensor(np.asarray(action, dtype=np.float32) if not isinstance(action, torch.Tensor) else action,
+                                    dtype=torch.float32, device=self.device)
         except (TypeError, ValueError) as e:
             raise ValueError(f"action must be numeric with shape {space.shape} or ({self.num_envs}, {space.shape[0]}): {e}") from None
         if a.shape not in (tuple(space.shape), (self.num_envs, *space.shape)):
             raise ValueError(f"action has shape {tuple(a.shape)}; expected {tuple(space.shape)} or "
                              f"({self.num_envs}, {space.shape[0]}) for control mode {self.control_mode!r}")
         if not torch.isfinite(a).all():
-            raise ValueError(f"action contains NaN or Inf: {a.tolist()}")
+            raw = action.detach().cpu().double() if isinstance(action, torch.Tensor) else torch.as_tensor(np.asarray(action, dtype=np.float64))
+            if not torch.isfinite(raw).all():
+                raise ValueError(f"action contains NaN or Inf: {raw.tolist()}")
+            # finite but beyond float32 (1e39): as far outside the space as any huge target, handled below
+            big = float(np.finfo(np.float32).max)
+            a = raw.clamp(-big, big).to(dtype=torch.float32, device=a.device)
         if self.droid_actions is not None:  # DROID's rescaling/IK replaces the per-dim clip below
             return self.droid_actions(self.agent, a)
         lo = torch.as_tensor(space.low, device=a.device)

@@ -1,4 +1,5 @@
-"""Run the bad-input corpus (``bad_input_cases.py`` and ``bad_input_cases_runs.py``): a clear one-line
+"""Run the bad-input corpus (``bad_input_cases.py``, ``bad_input_cases_runs.py`` and
+``bad_input_cases_contracts.py``): a clear one-line
 error with exit code 2, or accepted with its documented meaning; never a traceback, never a hang
 (every case has a timeout)."""
 
@@ -16,10 +17,11 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 
 from bad_input_cases import CASES as BASE_CASES, Case  # noqa: E402
+from bad_input_cases_contracts import CASES as CONTRACT_CASES, make_files as make_contract_files  # noqa: E402
 from bad_input_cases_runs import CASES as RUN_CASES, make_files  # noqa: E402
 from bad_input_files import make_all  # noqa: E402
 
-CASES = BASE_CASES + RUN_CASES
+CASES = BASE_CASES + RUN_CASES + CONTRACT_CASES
 
 REPO = Path(__file__).resolve().parents[2]
 REALM = Path(sys.executable).parent / "realm"
@@ -29,6 +31,7 @@ REALM = Path(sys.executable).parent / "realm"
 def root(tmp_path_factory) -> Path:
     r = tmp_path_factory.mktemp("bad_inputs")
     make_all(r)
+    make_contract_files(r)
     make_files(r)  # runs one tiny `realm eval` (the run directory the resume cases change)
     return r
 

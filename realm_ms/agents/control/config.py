@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from realm_ms.agents.control.presets import FRANKA_EFFORT_LIMITS, ImpedanceGains, JointPhysics
+from realm_ms.agents.control.presets import FRANKA_EFFORT_LIMITS, ImpedanceGains, JointPhysics, check_lengths
 from realm_ms.agents.urdf import DROID_RESET_QPOS
 
 INTEGRATORS = ("exact", "implicit_damping", "explicit")
@@ -42,6 +42,7 @@ class DroidControlConfig:
             raise ValueError(f"model_rate must be one of {MODEL_RATES}, got {self.model_rate!r}")
         if self.path_steps < 1 or not self.path_tolerance > 0:
             raise ValueError(f"path_steps must be >= 1 and path_tolerance > 0, got {self.path_steps}, {self.path_tolerance}")
+        check_lengths("droid_control", self, {"effort_limits": 7, "drive_damping": 7, "reference_qpos": 7})
 
     @property
     def follows_path(self) -> bool:

@@ -9,6 +9,24 @@ import torch
 FRANKA_EFFORT_LIMITS = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
 
 
+def check_lengths(owner: str, obj, lengths: dict[str, int]) -> None:
+    """ValueError naming ``owner.field`` when a per-joint (or per-axis) field is not that many finite
+    numbers (a list of 3 used to surface as numpy's broadcast message deep in the controller)."""
+    import math
+
+    for name, n in lengths.items():
+        v = getattr(obj, name)
+        if v is None:
+            continue
+        try:
+            values = [float(x) for x in v]
+        except (TypeError, ValueError):
+            raise ValueError(f"{owner}.{name}: expected a list of {n} numbers, got {v!r}") from None
+        if len(values) != n or not all(math.isfinite(x) for x in values):
+            raise ValueError(f"{owner}.{name}: expected {n} finite numbers (one per {'joint' if n == 7 else 'axis'}), "
+                             f"got {len(values)}: {list(v)}")
+
+
 @dataclass(frozen=True)
 class ImpedanceGains:
     """Polymetis hybrid joint impedance gains (joint: N.m/rad, N.m.s/rad; Cartesian: N/m, N.m/rad)."""
@@ -17,6 +35,9 @@ class ImpedanceGains:
     kqd: tuple[float, ...]
     kx: tuple[float, ...]
     kxd: tuple[float, ...]
+
+    def __post_init__(self):
+        check_lengths("gains", self, {"kq": 7, "kqd": 7, "kx": 6, "kxd": 6})
 
 
 GAIN_PRESETS: dict[str, ImpedanceGains] = {
@@ -43,6 +64,9 @@ class JointPhysics:
     friction: tuple[float, ...]
     armature: tuple[float, ...]
     friction_velocity: float = 0.02  # rad/s, tanh smoothing of sgn(qd)
+
+    def __post_init__(self):
+        check_lengths("joint_physics", self, {"friction": 7, "armature": 7})
 
 
 JOINT_PHYSICS_PRESETS: dict[str, JointPhysics] = {

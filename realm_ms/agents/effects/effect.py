@@ -79,10 +79,9 @@ class Effect(ActuationStage):
         for k, v in values.items():
             if k in self._slices:
                 sl = self._slices[k]
-                arr = np.array(np.broadcast_to(np.asarray(v, dtype=float), (sl.stop - sl.start,)))
-                row[sl] = torch.as_tensor(arr, dtype=torch.float32)
+                row[sl] = torch.as_tensor(_per_joint(k, v, sl.stop - sl.start), dtype=torch.float32)
             elif k in by_key:
-                row[by_key[k]] = float(v)
+                row[by_key[k]] = float(_per_joint(k, v, 1)[0])
             else:
                 raise KeyError(
                     f"effect {self.name!r} has no parameter {k!r}; it has "
@@ -188,6 +187,21 @@ class Effect(ActuationStage):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name}, B={self.theta.shape[0]})"
+
+
+def _per_joint(key: str, value: Any, n: int) -> np.ndarray:
+    """``value`` as ``n`` finite numbers: one number (every joint) or a list of exactly ``n``."""
+    want = "a number" if n == 1 else f"one number or a list of {n} (one per joint)"
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{key}: expected {want}, got {value!r}") from None
+    if arr.ndim > 1 or (arr.ndim == 1 and len(arr) != n and not (n > 1 and len(arr) == 1)):
+        got = f"a list of {len(arr)}" if arr.ndim == 1 else f"an array of shape {arr.shape}"
+        raise ValueError(f"{key}: expected {want}, got {got}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{key}: expected finite numbers, got {value!r}")
+    return np.array(np.broadcast_to(arr.reshape(-1), (n,)))
 
 
 def config_from_dict(cls: type, data: dict[str, Any]) -> EffectConfig:

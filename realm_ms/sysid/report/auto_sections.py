@@ -27,9 +27,9 @@ def auto_waterfall(d: ReportData):
     x.set_xticks(range(len(vals)), labels, rotation=20, fontsize=8)
     x.set_ylabel(f"held-out RMSE [{shown}]")
     x.legend(fontsize=8)
-    rows = [[lab, f"{v:.3e}", f"{v / max(floor, 1e-30):.1f}"] for lab, v in zip(labels, vals)]
+    rows = [[lab, f"{v:.3e}", _ratio(v, floor)] for lab, v in zip(labels, vals)]
     for r in (a.get("details") or {}).get("rejected", []):
-        rows.append([f"(rejected) {r['effect']}", f"{r['heldout_rmse']:.3e}", f"{r['heldout_rmse'] / max(floor, 1e-30):.1f}"])
+        rows.append([f"(rejected) {r['effect']}", f"{r['heldout_rmse']:.3e}", _ratio(r['heldout_rmse'], floor)])
     msg = (a.get("details") or {}).get("message", "")
     head = f"<p>verdict <b>{esc(fin['verdict'])}</b>. {esc(msg)}</p>"
     return ("Auto: nominal → + effect → …", head + to_img(fig, "auto waterfall")
@@ -58,3 +58,7 @@ def friction_curves(d: ReportData):
     return ("Friction curves of the model (steady sliding)",
             "<p class='note'>Torque needed to keep each joint sliding at q̇ (same sign as q̇, as in Gaz et al. 2019); "
             "the same grid as <code>auto --json</code> → <code>friction_curve</code>.</p>" + to_img(fig, "friction curves"))
+
+
+def _ratio(v: float, floor: float) -> str:
+    return f"{v / floor:.1f}" if floor > 0 else "- (floor 0)"  # a zero floor is never divided

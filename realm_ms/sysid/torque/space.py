@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from realm_ms.sysid.timeseries import Trajectory
+from realm_ms.sysid.timeseries import Trajectory, check_torque_rate
 from realm_ms.sysid.torque.smoothing import SmoothingConfig, noise_floor, smooth
 from realm_ms.sysid.torque.terms import EXTRA_SPECS, TERMS, TRACKING_ONLY, Samples, Series
 
@@ -44,6 +44,7 @@ class TorqueSet:
         for tr in trajs:
             if tr.tau is None:
                 raise ValueError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
+            check_torque_rate(tr)
             sm = smooth(tr.t, tr.q, tr.tau, tr.qd, smoothing)
             dt = float(np.median(np.diff(tr.t)))
             dts.append(dt)
