@@ -4,7 +4,10 @@ callable ``infer(obs: dict) -> dict`` to openpi clients (same handshake and fram
 
 ``serial=True`` answers one request at a time over all connections, as openpi's server does (its
 asyncio handler calls the model synchronously): the stand-in for one GPU server in the throughput
-bench."""
+bench.
+
+``infer`` may return ``bytes`` or ``str`` to send a frame as it is (tests of broken servers).
+``RoboArenaServer`` (``roboarena_server.py``) is this server with RoboArena's endpoints."""
 
 from __future__ import annotations
 
@@ -18,14 +21,21 @@ from realm_ms.eval.policies.openpi_wire import packb, unpackb
 class OpenPIServer:
     def __init__(self, infer: Callable[[dict], dict], host: str = "127.0.0.1", port: int = 0, metadata: dict | None = None,
                  serial: bool = False):
-        self.infer, self.host, self.port, self.metadata = infer, host, port, metadata or {}
+        self.infer, self.host, self.port = infer, host, port
+        self.metadata = {} if metadata is None else metadata
         self.requests = 0
         self._lock = threading.Lock() if serial else None
         self._server = None
         self._thread = None
 
+    def answer(self, obs: dict) -> bytes | str:
+        """The frame answering one request (openpi: the packed ``infer(obs)``)."""
+        reply = self.infer(obs)
+        self.requests += 1
+        return reply if isinstance(reply, (bytes, str)) else packb(reply)
+
     def _handle(self, ws) -> None:
-        ws.send(packb(self.metadata))
+        ws.send(self.metadata if isinstance(self.metadata, (bytes, str)) else packb(self.metadata))
         while True:
             try:
                 msg = ws.recv()
@@ -34,14 +44,18 @@ class OpenPIServer:
             try:
                 if self._lock is not None:
                     with self._lock:
-                        reply = self.infer(unpackb(msg))
+                        reply = self.answer(unpackb(msg))
                 else:
-                    reply = self.infer(unpackb(msg))
-                self.requests += 1
-                ws.send(packb(reply))
+                    reply = self.answer(unpackb(msg))
+                ws.send(reply)
             except Exception:
-                ws.send(traceback.format_exc())
-                ws.close()
+                # as openpi's and RoboArena's servers: the traceback as a text frame, then close
+                # with an internal-error code
+                try:
+                    ws.send(traceback.format_exc())
+                    ws.close(code=1011, reason="Internal server error. Traceback included in previous frame.")
+                except Exception:
+                    pass
                 return
 
     def start(self) -> "OpenPIServer":
