@@ -147,15 +147,24 @@ class Progress:
         return self.env_steps / max(time.perf_counter() - self.started, 1e-9)
 
 
-def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: bool = True, replan_every: int = 8) -> Progress:
+def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: bool = True, replan_every: int = 8,
+             policy_latency: str = "0", env_kwargs: dict | None = None) -> Progress:
     """Run ``keys`` on ``backend`` with ``policy``; ``on_record(record)`` is called per finished episode.
 
     One round: free slots start the next keys (``backend.assign``: preferring a slot's current
     (task, perturbation), so envs are reused), the policy acts once on the batch of slots that need
-    actions (``backend.policy_input``), and every active slot executes its chunk. Errors of the
-    policy for one row fail that episode only."""
+    actions (``backend.policy_input``), its output is validated (``policies.replies``: shape,
+    numbers, finite, within the bounds of the action space ``env_kwargs`` name), and every active
+    slot executes its chunk after holding its previous target for the policy's latency
+    (``latency.py``). A policy's error, exception or bad output for a row fails that episode only;
+    records state the latency setting and the latencies measured per server."""
     from tqdm import tqdm
 
+    from realm_ms.eval.latency import hold_steps, parse_latency
+    from realm_ms.eval.policies.replies import check_output
+
+    policy_latency = parse_latency(policy_latency)
+    measured: dict[int, dict[str, list[float]]] = {}  # slot -> server -> request wall times (s)
     queue = list(keys)
     prog = Progress(total=len(keys))
     bar = tqdm(total=len(keys), desc="episodes", unit="ep", disable=not progress_bar, dynamic_ncols=True)

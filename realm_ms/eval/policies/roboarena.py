@@ -12,8 +12,9 @@ sends it: ``observation/wrist_image_left``, ``observation/exterior_image_{1,2}_l
 env's camera size), ``session_id`` (a new one per episode), ``observation/joint_position`` (7),
 ``observation/cartesian_position`` (6: flange xyz + euler xyz, DROID's), ``observation/gripper_position``
 (1), ``prompt``. The answer is (N, 8): 7 joint actions in the declared space + gripper position,
-or ``{"actions": (N, 8)}``; as the evaluation client does, the gripper is binarised at 0.5 and joint
-velocities are clipped to [-1, 1]. A server asking for stereo images is refused (realm-ms has no
+or ``{"actions": (N, 8)}``; joint velocities are clipped to [-1, 1] as RoboArena's evaluation client
+does, the gripper position is clipped to [0, 1] but not binarised at 0.5 as that client does (the
+env's gripper follows a position command; a policy that answers 0/1 is unaffected). A server asking for stereo images is refused (realm-ms has no
 stereo cameras).
 
 Transport, concurrency, retries, reply validation and error records are ``websocket_client``'s
@@ -189,8 +190,8 @@ class RoboArenaPolicy(ServerPolicy):
         return reply
 
     def postprocess(self, chunk: np.ndarray, space) -> np.ndarray:
-        """As RoboArena's evaluation client: gripper binarised at 0.5, joint velocities clipped to [-1, 1]."""
-        chunk[:, -1] = (chunk[:, -1] > 0.5).astype(np.float32)
+        """Gripper position clipped to [0, 1]; joint velocities clipped to [-1, 1], as RoboArena's evaluation client."""
+        chunk = super().postprocess(chunk, space)
         if self.config.action_space == "joint_velocity":
             chunk[:, :7] = np.clip(chunk[:, :7], -1.0, 1.0)
         return chunk
