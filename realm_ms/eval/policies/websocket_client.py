@@ -331,7 +331,10 @@ class ServerPolicy(Policy):
         server stays down, errs or answers wrongly gets an error naming the server, the others are served."""
         from realm_ms.eval.policies.replies import check_chunk
 
-        space, ik = self._space()
+        try:
+            space, ik = self._space()
+        except ReplyError as e:  # the first server's metadata is bad: every row fails, naming it
+            return PolicyOutput(np.repeat(batch.state[:, None, :], 1, axis=1), [str(e)] * len(batch))
 
         def work(conn: Connection, i: int):
             reply = conn.exchange(self.request(batch, i), self.text_ok)
