@@ -8,7 +8,8 @@ import pytest
 
 from realm_ms.eval.policies import PolicyInput, make_policy
 from realm_ms.eval.policies.openpi_wire import resize_with_pad
-from realm_ms.eval.policies.roboarena_server import ReplayChunks, RoboArenaServer
+from realm_ms.eval.policies.openpi_server import ReplayInfer
+from realm_ms.eval.policies.roboarena_server import RoboArenaServer
 
 STATE = np.array([0.0, -0.6, 0.0, -2.5, 0.0, 1.9, 0.0, 0.0], np.float32)
 ALWAYS = {"observation/joint_position", "observation/cartesian_position", "observation/gripper_position", "prompt"}
@@ -144,24 +145,10 @@ def test_an_unreachable_server_fails_before_any_work():
 
 
 def _expert_actions(space: str) -> np.ndarray:
-    import gymnasium as gym
-
-    import realm_ms  # noqa: F401
-    from realm_ms.expert.core import start_episode
+    from realm_ms.eval.policies.openpi_server import expert_actions
 
     kw = {} if space == "joint_position" else dict(action_space="joint_velocity", gripper_action_space="position")
-    env = gym.make("REALM-PickApple-v1", obs_mode="state", **kw)
-    obs, expert = start_episode(env, seed=0)
-    actions = []
-    for _ in range(300):
-        a = expert.act(obs)
-        actions.append(a[0].numpy())
-        obs, _, term, trunc, info = env.step(a)
-        if bool(term[0]) or bool(trunc[0]):
-            break
-    env.close()
-    assert bool(info["success"][0])
-    return np.stack(actions)
+    return expert_actions("REALM-PickApple-v1", 0, 300, **kw)
 
 
 @pytest.mark.parametrize("space", ["joint_position", "joint_velocity"])
@@ -173,7 +160,7 @@ def test_the_experts_chunks_drive_an_episode_to_success(space, tmp_path):
     from realm_ms.eval.records import read_records
 
     actions = _expert_actions(space)
-    with RoboArenaServer(ReplayChunks(actions, chunk=8), dict(action_space=space)) as srv:
+    with RoboArenaServer(ReplayInfer(actions, chunk=8), dict(action_space=space)) as srv:
         proto = PRESETS["realm"].with_overrides(episodes=1, seed=0, max_steps=len(actions) + 8, replan_every=8)
         code = evaluate(f"roboarena:{srv.address}", ["REALM-PickApple-v1"], ["Default"], proto, tmp_path / "run", workers=1,
                         backend="cpu", camera_size=(64, 36), quality=False, progress=False, quiet=True)

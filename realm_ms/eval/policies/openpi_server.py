@@ -107,12 +107,16 @@ def sleep_infer(obs: dict, seconds: float = 0.1, horizon: int = 10) -> dict:
 
 class ReplayInfer:
     """Serves a recorded action sequence in chunks of ``chunk``, one chunk per request, in order
-    (tests: a server answering an expert's recorded velocities)."""
+    (tests: a server answering an expert's recorded actions); ``reset`` (RoboArena's endpoint)
+    starts it again."""
 
     def __init__(self, actions, chunk: int = 8):
         import numpy as np
 
         self.actions, self.chunk, self.k = np.asarray(actions, dtype=np.float64), chunk, 0
+
+    def reset(self, info: dict | None = None) -> None:
+        self.k = 0
 
     def __call__(self, obs: dict) -> dict:
         a = self.actions[self.k: self.k + self.chunk]
@@ -120,3 +124,30 @@ class ReplayInfer:
             a = self.actions[-1:]
         self.k += self.chunk
         return {"actions": a}
+
+
+def expert_actions(task: str = "REALM-PickApple-v1", seed: int = 0, max_steps: int = 300, **env_kwargs):
+    """The scripted expert's actions for one successful episode (state observations), in the action
+    space ``env_kwargs`` name: what a stand-in server replays (tests, docs). Raises ``RuntimeError``
+    if the expert does not succeed within ``max_steps``."""
+    import gymnasium as gym
+    import numpy as np
+
+    import realm_ms  # noqa: F401  (registers the envs)
+    from realm_ms.expert.core import start_episode
+
+    env = gym.make(task, obs_mode="state", **env_kwargs)
+    try:
+        obs, expert = start_episode(env, seed=seed)
+        actions, info = [], {}
+        for _ in range(max_steps):
+            a = expert.act(obs)
+            actions.append(a[0].numpy())
+            obs, _, term, trunc, info = env.step(a)
+            if bool(term[0]) or bool(trunc[0]):
+                break
+    finally:
+        env.close()
+    if not bool(info.get("success", [False])[0]):
+        raise RuntimeError(f"the expert did not succeed in {task} seed {seed} within {max_steps} steps")
+    return np.stack(actions)

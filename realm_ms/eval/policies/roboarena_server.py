@@ -5,7 +5,8 @@ answered with the text frame ``"reset successful"``, ``"infer"`` with the packed
 array; a failing policy sends its traceback as a text frame and closes with an internal-error code.
 
 For tests, the policy-author docs and the throughput bench. ``policy``: an object with
-``infer(obs) -> (N, 8)`` and optionally ``reset(info)``, or a plain ``infer`` callable.
+``infer(obs) -> (N, 8)`` and optionally ``reset(info)``, or an ``infer`` callable (with an optional
+``reset``, e.g. ``openpi_server.ReplayInfer``).
 """
 
 from __future__ import annotations
@@ -38,23 +39,3 @@ class RoboArenaServer(OpenPIServer):
         action = self.infer(obs)
         self.requests += 1
         return action if isinstance(action, (bytes, str)) else packb(action)
-
-
-class ReplayChunks:
-    """Serves a recorded action sequence, ``chunk`` actions per infer request, in order (tests: a
-    server answering the expert's recorded actions); ``reset`` starts it again."""
-
-    def __init__(self, actions, chunk: int = 8):
-        import numpy as np
-
-        self.actions, self.chunk, self.k = np.asarray(actions, dtype=np.float64), chunk, 0
-
-    def reset(self, info: dict) -> None:
-        self.k = 0
-
-    def infer(self, obs: dict):
-        a = self.actions[self.k: self.k + self.chunk]
-        if len(a) == 0:
-            a = self.actions[-1:]
-        self.k += self.chunk
-        return a
