@@ -81,8 +81,8 @@ def test_addresses_are_parsed_strictly(text, match):
 
 
 def test_good_addresses():
-    got = parse_addresses("localhost:8000, 10.0.0.2:1,[::1]:9000,gpu-3.lab.example.org:65535", "openpi")
-    assert [str(a) for a in got] == ["localhost:8000", "10.0.0.2:1", "[::1]:9000", "gpu-3.lab.example.org:65535"]
+    got = parse_addresses("localhost:8000, 10.0.0.2:1,[::1]:9000,gpu-3.lab.example.org:65535,policy_server:80", "openpi")
+    assert [str(a) for a in got] == ["localhost:8000", "10.0.0.2:1", "[::1]:9000", "gpu-3.lab.example.org:65535", "policy_server:80"]
     assert got[2].uri == "ws://[::1]:9000"
 
 
@@ -145,6 +145,25 @@ def test_bad_openpi_replies_name_the_server(reply, match):
         assert out.errors and all(e and f"openpi server {srv.address}" in e and match in e for e in out.errors), out.errors
         assert "unreachable" not in out.errors[0]
         pol.close()
+
+
+def test_a_server_that_closes_before_its_metadata():
+    import threading
+
+    from websockets.sync.server import serve
+
+    server = serve(lambda ws: ws.close(), "127.0.0.1", 0)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        port = server.socket.getsockname()[1]
+        pol = make_policy(f"openpi:127.0.0.1:{port}", openpi_wait_s=1.0)
+        out = pol.act(_batch(1))
+        assert out.errors and out.errors[0].startswith(f"openpi server 127.0.0.1:{port}: closed the connection before sending its metadata")
+        pol.close()
+        with pytest.raises(ValueError, match="closed the connection before sending its metadata"):
+            make_policy(f"roboarena:127.0.0.1:{port}", openpi_wait_s=1.0)
+    finally:
+        server.shutdown()
 
 
 def test_a_silent_server_is_not_unreachable():

@@ -32,9 +32,9 @@ from realm_ms.eval.policies.policy import Policy, PolicyInput, PolicyOutput
 from realm_ms.eval.policies.replies import ReplyError
 
 ADDRESS_HELP = "HOST:PORT[,HOST:PORT...] (IPv6 hosts in brackets: [::1]:8000)"
-_LABEL = r"[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?"
+_LABEL = r"[A-Za-z0-9_](?:[A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?"  # "_": container service names
 _HOSTNAME = re.compile(rf"{_LABEL}(?:\.{_LABEL})*")
-_ALLOWED = re.compile(r"[A-Za-z0-9.\-:\[\]]*")
+_ALLOWED = re.compile(r"[A-Za-z0-9_.\-:\[\]]*")
 
 
 @dataclass(frozen=True)
@@ -128,6 +128,8 @@ class Connection:
         except TimeoutError:
             raise ReplyError(f"{self.source}: accepted the connection but sent no metadata within {self.reply_timeout_s:g} s "
                              f"(is it a {self.kind} policy server?)") from None
+        except Exception as e:  # noqa: BLE001  closed before its first frame
+            raise ReplyError(f"{self.source}: closed the connection before sending its metadata ({type(e).__name__}: {e})") from None
         self.metadata = self.check_metadata(self._decode(first, "metadata"), self.source)
 
     def _decode(self, data, what: str):
@@ -226,6 +228,9 @@ class ServerPool:
                 return work(conn, i), None, time.perf_counter() - t, str(conn.address)
             except (ConnectionError, RuntimeError) as e:
                 return None, str(e), time.perf_counter() - t, str(conn.address)
+            except Exception as e:  # noqa: BLE001  anything else a server provokes fails its row, not the round
+                conn.close()
+                return None, f"{conn.source}: {type(e).__name__}: {e}", time.perf_counter() - t, str(conn.address)
 
         if n == 0:
             return []
