@@ -231,3 +231,24 @@ def test_export_refuses_a_velocity_server(tmp_path, capsys):
         assert srv.requests == 0
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert code == 2 and "acts in joint_velocity:velocity (its server declares it)" in err, err
+
+
+class _NotAnOutput(Policy):
+    name = "bare-array"
+
+    def act(self, batch):
+        return np.repeat(batch.state[:, None, :], 2, axis=1)  # an ndarray, not a PolicyOutput
+
+
+def test_a_policy_returning_a_bare_array_fails_its_episodes_not_the_run():
+    from realm_ms.eval.protocol import EpisodeKey
+    from realm_ms.eval.runner import RunConfig, run_plan
+    from realm_ms.eval.workers import InlineBackend
+
+    be = InlineBackend(RunConfig(policy="bare-array", max_steps=4, replan_every=2, quality=False), 1)
+    recs = []
+    try:
+        run_plan([EpisodeKey("REALM-PickApple-v1", "Default", 0)], _NotAnOutput(), be, recs.append, progress_bar=False, replan_every=2)
+    finally:
+        be.close()
+    assert recs[0]["status"] == "error" and recs[0]["error"] == "bare-array: returned a ndarray, not a PolicyOutput with actions (1, T, 8)", recs[0]

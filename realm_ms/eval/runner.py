@@ -227,13 +227,14 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
                     out = PolicyOutput(np.zeros((len(ready), 1, 8), np.float32), [f"{policy.spec()}: {type(e).__name__}: {e}"] * len(ready))
                 wall = time.perf_counter() - t0
                 actions, errors = check_output(out, len(ready), env_kwargs, policy.spec())
-                lat = list(out.latency_s) if out.latency_s is not None and len(out.latency_s) == len(ready) else [wall] * len(ready)
-                servers = list(out.servers) if out.servers is not None and len(out.servers) == len(ready) else [policy.spec()] * len(ready)
+                lat, servers = getattr(out, "latency_s", None), getattr(out, "servers", None)  # server policies time each row
+                lat = list(lat) if lat is not None and len(lat) == len(ready) else [wall] * len(ready)
+                servers = list(servers) if servers is not None and len(servers) == len(ready) else [policy.spec()] * len(ready)
                 for i, s in enumerate(ready):
-                    measured.setdefault(s, {}).setdefault(servers[i], []).append(lat[i])
                     if errors and errors[i]:
                         aborts[s] = errors[i]
-                    else:
+                    else:  # a failed request's time (retries, timeouts) is not the policy's latency
+                        measured.setdefault(s, {}).setdefault(servers[i], []).append(lat[i])
                         commands[s] = actions[i, :replan_every]
                         if policy_latency != "0":
                             delays[s] = hold_steps(policy_latency, lat[i])

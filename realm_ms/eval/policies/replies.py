@@ -78,6 +78,8 @@ def check_output(out, n_rows: int, env_kwargs: dict | None, source: str):
     if not ok:
         shape = getattr(acts, "shape", type(acts).__name__)
         why = f"{source}: returned actions of shape {shape}; expected ({n_rows}, T, {space.dim}) for {n_rows} row(s)"
+        if not hasattr(out, "actions"):
+            why = f"{source}: returned a {type(out).__name__}, not a PolicyOutput with actions ({n_rows}, T, {space.dim})"
         return np.zeros((n_rows, 1, space.dim), np.float32), [e or why for e in errors]
     for i in range(n_rows):
         if errors[i] is None:

@@ -195,7 +195,7 @@ class Connection:
             except ReplyError:
                 self.close()
                 raise
-        raise AssertionError("unreachable")  # pragma: no cover
+        raise AssertionError("not reached")  # pragma: no cover
 
 
 class ServerPool:
