@@ -14,7 +14,7 @@ def test_the_rounding_rule():
     assert hold_steps("0", 1.0) == 0 and hold_steps("measured", 0.0) == 0 and hold_steps("measured", 0.033) == 0
 
 
-@pytest.mark.parametrize("text, want", [("0", "0"), ("0.30", "0.3"), ("measured", "measured"), (" Measured ", "measured"), (0.25, "0.25")])
+@pytest.mark.parametrize("text, want", [("0", "0"), ("-0", "0"), ("0.0", "0"), ("0.30", "0.3"), ("measured", "measured"), (" Measured ", "measured"), (0.25, "0.25")])
 def test_settings(text, want):
     assert parse_latency(text) == want
 

@@ -37,6 +37,8 @@ def parse_latency(value) -> str:
         s = check_number(value, "--policy-latency", "s", minimum=0.0)
     except ValueError as e:
         raise InputError(f"{e}; or 'measured' (each request's wall time)") from None
+    if s == 0:
+        return "0"  # also -0
     if s > 60:
         raise InputError(f"--policy-latency: {s:g} s is more than 60 s; give seconds (e.g. 0.3), 0, or 'measured'")
     return f"{s:g}"

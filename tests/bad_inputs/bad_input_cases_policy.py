@@ -38,6 +38,8 @@ CASES: list[Case] = [
     cli("policy-roboarena-no-address", _ev("roboarena"), r"--policy roboarena needs the server address: roboarena:HOST:PORT"),
     cli("policy-roboarena-port-70000", _ev("roboarena:127.0.0.1:70000"), r"port: must be <= 65535, got 70000"),
     cli("policy-roboarena-ipv6-unbracketed", _ev("roboarena:::1:8000"), r"an IPv6 host goes in brackets"),
+    cli("policy-roboarena-bad-action-space", _ev("roboarena:127.0.0.1:1", extra="--action-space warp"),
+        r"--action-space: unknown action_space 'warp'"),
     cli("policy-roboarena-unreachable", _ev("roboarena:127.0.0.1:1", extra="--openpi-wait 0.5"),
         r"roboarena server 127\.0\.0\.1:1 unreachable for 0\.5 s"),
     # ------------------------------------------------------------------------ --policy-latency

@@ -98,16 +98,20 @@ class RoboArenaPolicy(ServerPolicy):
         """Connects to the first server now: its config decides the cameras and the action space.
         ``ConnectionError`` when it stays unreachable, ``ValueError`` for a config realm-ms cannot
         serve (stereo) or a bad one, or an ``action_space`` option the config contradicts."""
+        from realm_ms.agents.droid_action_spaces import parse_action_space_flag
+
         self.config: RoboArenaConfig | None = None
+        try:
+            wanted = parse_action_space_flag(action_space) if action_space else None
+        except ValueError as e:
+            raise ValueError(f"--action-space: {e}") from None
         super().__init__(address, max_wait_s, connections, max_in_flight, reply_timeout_s)
         try:
             self.conns[0].connect()
         except ReplyError as e:
             raise ValueError(str(e)) from None
         if action_space:
-            from realm_ms.agents.droid_action_spaces import parse_action_space_flag
-
-            if parse_action_space_flag(action_space) != self.config.env_action_space():
+            if wanted != self.config.env_action_space():
                 raise ValueError(f"--action-space {action_space}: {self.conns[0].source} declares action_space {self.config.action_space} "
                                  "(a RoboArena server chooses its action space); drop --action-space")
         self.sessions: dict[int, str] = {}
