@@ -25,10 +25,11 @@ TASKS = ["REALM-PickApple-v1", "REALM-PushSwitch-v1"]
 
 
 def _records(path):
-    """Records by key, without wall time; a video as its file's bytes (the paths differ by run directory)."""
+    """Records by key, without wall times (the episode's, the policy's requests'); a video as its
+    file's bytes (the paths differ by run directory)."""
     out = {}
     for r in map(json.loads, path.read_text().splitlines()):
-        r.pop("wall_s")
+        r.pop("wall_s"), r.pop("latency_s", None)
         r["config"].pop("sim_backend")  # inline asks for "auto", batched names "physx_cpu": the same CPU physics
         if "video" in r:
             r["video"] = Path(r["video"]).read_bytes()
@@ -276,7 +277,7 @@ def test_one_slot_runner_and_sub_env_slots_give_the_same_records():
         finally:
             backend.close()
         for r in recs:
-            r.pop("wall_s")
+            r.pop("wall_s"), r.pop("latency_s", None)
             r["config"].pop("num_envs", None), r["config"].pop("sim_backend", None)
         return {(r["task"], r["seed"]): r for r in recs}
 

@@ -200,28 +200,14 @@ def test_server_metadata_declares_the_action_space():
 def test_velocity_chunks_from_a_server_drive_an_episode_to_success(tmp_path):
     """A stand-in server answers the scripted expert's recorded joint velocities, 8 per request;
     ``realm eval`` in joint_velocity space (declared by the server) replays them to success."""
-    import gymnasium as gym
-
-    import realm_ms  # noqa: F401
     from realm_ms.eval.cli import evaluate
-    from realm_ms.eval.policies.openpi_server import ReplayInfer
+    from realm_ms.eval.policies.openpi_server import ReplayInfer, expert_actions
     from realm_ms.eval.protocol import PRESETS
     from realm_ms.eval.records import read_records
-    from realm_ms.expert.core import start_episode
 
-    env = gym.make("REALM-PickApple-v1", obs_mode="state", action_space="joint_velocity")
-    obs, expert = start_episode(env, seed=0)
-    actions = []
-    for _ in range(200):
-        a = expert.act(obs)
-        actions.append(a[0].numpy())
-        obs, _, term, trunc, info = env.step(a)
-        if bool(term[0]) or bool(trunc[0]):
-            break
-    env.close()
-    assert bool(info["success"][0])
+    actions = expert_actions("REALM-PickApple-v1", 0, 200, action_space="joint_velocity")
     meta = {"action_space": "joint_velocity", "gripper_action_space": "velocity"}
-    with OpenPIServer(ReplayInfer(np.stack(actions), chunk=8), metadata=meta) as srv:
+    with OpenPIServer(ReplayInfer(actions, chunk=8), metadata=meta) as srv:
         proto = PRESETS["realm"].with_overrides(episodes=1, seed=0, max_steps=len(actions) + 8, replan_every=8)
         evaluate(f"openpi:{srv.address}", ["REALM-PickApple-v1"], ["Default"], proto, tmp_path / "run", workers=1,
                  backend="cpu", camera_size=(64, 36), quality=False, progress=False, quiet=True)

@@ -73,10 +73,10 @@ class BatchedBackend(Backend):
             out.update(self.groups[gi].start(keys))
         return out
 
-    def step(self, commands: dict) -> dict:
+    def step(self, commands: dict, delays: dict | None = None) -> dict:
         out = {}
         for gi, cmds in self._by_group(commands).items():
-            out.update(self.groups[gi].step(cmds))
+            out.update(self.groups[gi].step(cmds, delays=delays))
         return out
 
     def abort(self, aborts: dict[int, str]) -> dict:

@@ -1,6 +1,6 @@
 """``realm eval``: run a policy under the REALM protocol (resumable), and ``realm eval report``.
 
-    realm eval --policy {expert|zero|random|lerobot:PATH_OR_ID|openpi:HOST:PORT} --tasks ID ... \\
+    realm eval --policy {expert|zero|random|lerobot:PATH_OR_ID|openpi:HOST:PORT|roboarena:HOST:PORT} --tasks ID ... \\
         [--perturbations NAME ...] --episodes N [--seed S] [--max-steps N] [--workers N] --out RUN/
     realm eval report RUN/ --out report.html
 
@@ -22,7 +22,8 @@ MAX_EPISODES = 100_000  # per (task, perturbation) cell; REALM runs 25
 def add_parser(sub) -> None:
     p = sub.add_parser("eval", help="evaluate a policy under the REALM protocol; `realm eval report RUN/` for the report",
                        usage="realm eval --policy SPEC --out RUN/ [options]\n       realm eval report RUN/ [--out FILE] [--videos ...] [--reference POLICY]")
-    p.add_argument("--policy", help="required: expert | zero | random | lerobot:PATH_OR_ID | openpi:HOST:PORT")
+    p.add_argument("--policy", help="required: expert | zero | random | lerobot:PATH_OR_ID | openpi:HOST:PORT[,HOST:PORT...] | "
+                   "roboarena:HOST:PORT[,HOST:PORT...]")
     p.add_argument("--protocol", choices=sorted(PRESETS), default="realm", help="preset the other flags override (default realm)")
     p.add_argument("--tasks", nargs="+", help="env ids, or 'all' (default: the protocol's)")
     p.add_argument("--perturbations", nargs="+", help="names (e.g. Default V-AUG), or 'all' (default: the protocol's)")
@@ -42,10 +43,13 @@ def add_parser(sub) -> None:
     p.add_argument("--videos", choices=("none", "failures", "all"), default="none", help="exterior + wrist mp4 per episode")
     p.add_argument("--openpi-format", choices=("pi0", "groot"), default="pi0", help="openpi request keys/resolution")
     p.add_argument("--openpi-wait", type=positive("s"), default=30.0,
-                   help="seconds (finite, > 0) to retry a down openpi server before failing the episode")
+                   help="seconds (finite, > 0) to retry a down policy server (openpi or RoboArena) before failing the episode")
+    p.add_argument("--policy-latency", type=_latency, default="0",
+                   help="the real robot's clock: the arm keeps tracking its previous target for the policy's latency before each new "
+                        "chunk: 0 (default, time stops during inference, as REALM), SECONDS, or 'measured' (each request's wall time)")
     p.add_argument("--action-space", default=None, help="DROID action space the policy acts in: joint_position (default) | joint_velocity | "
                    "cartesian_velocity | cartesian_position, optionally :position or :velocity for the gripper (e.g. joint_velocity:position, "
-                   "pi0-FAST-DROID); default: what an openpi server's metadata declares")
+                   "pi0-FAST-DROID); default: what an openpi server's metadata declares (a RoboArena server's config decides)")
     p.add_argument("--device", default="cpu", help="torch device for LeRobot policies")
     p.add_argument("--no-quality", action="store_true", help="skip trajectory-quality metrics (contacts walk per step)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -121,7 +125,7 @@ def run(args) -> int:
     if args.eval_command == "report":
         return run_report(args)
     if not args.policy:
-        raise UserError("--policy is required (expert | zero | random | lerobot:PATH_OR_ID | openpi:HOST:PORT)")
+        raise UserError("--policy is required (expert | zero | random | lerobot:PATH_OR_ID | openpi:HOST:PORT | roboarena:HOST:PORT)")
     if not args.out:
         raise UserError("--out RUN/ is required")
     from realm_ms.eval.rundir import check_run_paths
@@ -136,7 +140,20 @@ def run(args) -> int:
         args.policy, tasks, perts, proto, args.out, workers=args.workers, backend=args.backend, ray_address=args.ray_address,
         camera_size=parse_camera_size(args.camera_size), videos=args.videos, quality=not args.no_quality, progress=not args.no_progress,
         policy_options=dict(openpi_format=args.openpi_format, openpi_wait_s=args.openpi_wait, device=args.device, action_space=args.action_space),
+        policy_latency=args.policy_latency,
     )
+
+
+def _latency(text: str) -> str:
+    """argparse type of ``--policy-latency`` (``latency.parse_latency``)."""
+    import argparse
+
+    from realm_ms.eval.latency import parse_latency
+
+    try:
+        return parse_latency(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e).removeprefix("--policy-latency: ")) from None
 
 
 def check_policy_spec(spec: str) -> None:
@@ -154,8 +171,15 @@ def check_policy_spec(spec: str) -> None:
             raise UserError(f"--policy lerobot:{arg}: no such checkpoint directory {path} (a Hub repo id is OWNER/NAME)")
         if path.exists() and not path.is_dir():
             raise UserError(f"--policy lerobot:{arg}: {path} is a file; give the checkpoint directory (with config.json)")
-    elif kind == "openpi" and not arg:
-        raise UserError("--policy openpi needs the server address: openpi:HOST:PORT")
+    elif kind in ("openpi", "roboarena"):
+        from realm_ms.eval.policies.websocket_client import parse_addresses
+
+        if not arg:
+            raise UserError(f"--policy {kind} needs the server address: {kind}:HOST:PORT")
+        try:
+            parse_addresses(arg, kind)  # strictly, once, before anything loads
+        except ValueError as e:
+            raise UserError(f"--policy {e}") from None
 
 
 def check_ray_address(address: str) -> None:
@@ -196,8 +220,10 @@ def _connect_ray(address: str) -> None:
 
 def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: int | None = None, backend: str = "auto",
              ray_address: str | None = None, camera_size=None, videos: str = "none", quality: bool = True,
-             progress: bool = True, policy_options: dict | None = None, env_kwargs: dict | None = None, quiet: bool = False) -> int:
-    """Programmatic ``realm eval`` (used by the CLI, the demo and the expert bench)."""
+             progress: bool = True, policy_options: dict | None = None, env_kwargs: dict | None = None, quiet: bool = False,
+             policy_latency="0") -> int:
+    """Programmatic ``realm eval`` (used by the CLI, the demo and the expert bench); ``policy_latency``:
+    0, seconds or ``"measured"`` (``latency.py``)."""
     from realm_ms.errors import UserError
     from realm_ms.eval.metrics import compute_metrics
     from realm_ms.eval.policies import make_policy, policy_action_space
@@ -209,8 +235,14 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
     from realm_ms.registry import UnknownNameError
     from realm_ms.validate import check_seed
 
+    from realm_ms.eval.latency import parse_latency
+
     out = check_run_paths(Path(out), videos)  # before the policy loads: a bad --out never costs a model load
     check_seed(proto.seed, "--seed", proto.episodes)
+    try:
+        policy_latency = parse_latency(policy_latency)
+    except ValueError as e:
+        raise UserError(str(e)) from None
     policy_options = policy_options or {}
     try:
         policy = make_policy(policy_spec, **policy_options)
@@ -221,7 +253,7 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
         req.width, req.height = camera_size
     cfg = RunConfig(policy=policy.spec(), env_side=policy.env_side, max_steps=proto.max_steps, replan_every=proto.replan_every,
                     success_tail=proto.success_tail, obs=req, videos=videos, videos_dir=str(out / "videos"), quality=quality,
-                    env_kwargs=policy_action_space(policy, policy_options) | (env_kwargs or {}))
+                    env_kwargs=policy_action_space(policy, policy_options) | (env_kwargs or {}), policy_latency=policy_latency)
     # the run directory contract (rundir.py): run.json and every record carry this fingerprint
     fp = fingerprint(policy.spec(), proto, cfg)
     problems: list[str] = []
@@ -258,7 +290,8 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
             except RuntimeError as e:
                 raise UserError(str(e)) from None
             try:
-                run_plan(keys, policy, be, append, progress_bar=progress, replan_every=proto.replan_every)
+                run_plan(keys, policy, be, append, progress_bar=progress, replan_every=proto.replan_every,
+                         policy_latency=cfg.policy_latency, env_kwargs=cfg.env_kwargs)
             finally:
                 be.close()
     finally:

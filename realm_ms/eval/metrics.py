@@ -20,6 +20,7 @@ from collections import defaultdict
 import numpy as np
 
 from realm_ms.eval.protocol import DEFAULT, factor_groups
+from realm_ms.eval.latency import latency_summary
 from realm_ms.eval.records import latest_by_key
 
 Z95 = 1.959963984540054
@@ -134,6 +135,7 @@ def compute_metrics(records: list[dict]) -> dict:
         "failure_stages_per_task": {t: failure_stages(rs) for t, rs in sorted(_group(ok, lambda r: [r["task"]]).items())},
         "time_to_stage": time_to_stage(ok),
         "errors": [{k: r.get(k) for k in ("task", "perturbation", "seed", "error")} for r in latest if r.get("status") == "error"],
+        "policy_latency": latency_summary(latest),  # the setting(s) and per-server median / p95 of the measured latencies
         "unsupported_cells": sorted({(r["task"], r["perturbation"]) for r in latest if r.get("status") == "unsupported"}),
         "policies": sorted({r.get("policy", "?") for r in ok}),
     }

@@ -141,7 +141,28 @@ def run_protocol(run_dir: Path, records: list[dict]) -> dict[str, str]:
         "camera": _mixed(cams) + (" per camera (the policy's frames and the videos)" if cams else "")
         + (f"; {' / '.join(shaders)} shader" if shaders else ""),
         "code version": _mixed(versions),
+        "policy latency": describe_latency(records),
     }
+
+
+def describe_latency(records: list[dict]) -> str:
+    """The ``--policy-latency`` setting(s) the records ran with, and the latencies measured per server."""
+    from realm_ms.eval.latency import MEASURED, hold_steps, latency_summary
+
+    lat = latency_summary(records)
+
+    def setting(s: str) -> str:
+        if s == "0":
+            return "0 (time stops during inference, as REALM)"
+        if s == MEASURED:
+            return "measured (the arm holds its previous target for each request's wall time)"
+        return f"{s} s (the arm holds its previous target {hold_steps(s, 0)} control steps before each chunk)"
+
+    text = _mixed([setting(s) for s in lat["settings"]]) if lat["settings"] else "not recorded (0)"
+    if lat["servers"]:
+        text += "; measured: " + ", ".join(f"{k} median {v['median_s'] * 1000:.0f} ms, p95 {v['p95_s'] * 1000:.0f} ms "
+                                           f"({v['requests']} requests)" for k, v in lat["servers"].items())
+    return text
 
 
 def protocol_block(proto: dict[str, str], n_ok: int, n_err: int, n_unsup: int, run_dir: Path | None = None) -> str:

@@ -36,9 +36,13 @@ def fingerprint(policy_spec: str, proto, cfg) -> dict:
     gripper = env_config.pop("gripper_action_space", None)
     control = env_config.pop("control_mode", None)
     action_space = ":".join(str(x) for x in (space, gripper) if x) + (f" ({control})" if control else "")
-    return dict(policy=policy_spec, protocol=proto.name, max_steps=proto.max_steps, replan_every=proto.replan_every,
-                success_tail=proto.success_tail, camera_size=[cfg.obs.width, cfg.obs.height], action_space=action_space,
-                code_version=f"realm-ms {__version__}", env_config=env_config)
+    fp = dict(policy=policy_spec, protocol=proto.name, max_steps=proto.max_steps, replan_every=proto.replan_every,
+              success_tail=proto.success_tail, camera_size=[cfg.obs.width, cfg.obs.height], action_space=action_space,
+              code_version=f"realm-ms {__version__}", env_config=env_config)
+    latency = str(getattr(cfg, "policy_latency", "0"))
+    if latency != "0":  # absent at the default, so runs made before the setting existed still resume
+        fp["policy_latency"] = latency
+    return fp
 
 
 def check_run_paths(out: Path, videos: str = "none") -> Path:

@@ -42,6 +42,7 @@ class RunConfig:
     videos_dir: str | None = None
     quality: bool = True
     env_kwargs: dict = field(default_factory=dict)
+    policy_latency: str = "0"  # "0" | "measured" | seconds (``latency.py``): the hold before each chunk
 
     def needs_rgb(self) -> bool:
         return bool(self.obs.cameras) or self.videos != "none"
@@ -146,15 +147,24 @@ class Progress:
         return self.env_steps / max(time.perf_counter() - self.started, 1e-9)
 
 
-def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: bool = True, replan_every: int = 8) -> Progress:
+def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: bool = True, replan_every: int = 8,
+             policy_latency: str = "0", env_kwargs: dict | None = None) -> Progress:
     """Run ``keys`` on ``backend`` with ``policy``; ``on_record(record)`` is called per finished episode.
 
     One round: free slots start the next keys (``backend.assign``: preferring a slot's current
     (task, perturbation), so envs are reused), the policy acts once on the batch of slots that need
-    actions (``backend.policy_input``), and every active slot executes its chunk. Errors of the
-    policy for one row fail that episode only."""
+    actions (``backend.policy_input``), its output is validated (``policies.replies``: shape,
+    numbers, finite, within the bounds of the action space ``env_kwargs`` name), and every active
+    slot executes its chunk after holding its previous target for the policy's latency
+    (``latency.py``). A policy's error, exception or bad output for a row fails that episode only;
+    records state the latency setting and the latencies measured per server."""
     from tqdm import tqdm
 
+    from realm_ms.eval.latency import hold_steps, parse_latency
+    from realm_ms.eval.policies.replies import check_output
+
+    policy_latency = parse_latency(policy_latency)
+    measured: dict[int, dict[str, list[float]]] = {}  # slot -> server -> request wall times (s)
     queue = list(keys)
     prog = Progress(total=len(keys))
     bar = tqdm(total=len(keys), desc="episodes", unit="ep", disable=not progress_bar, dynamic_ncols=True)
@@ -172,6 +182,11 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
         count_steps(slot, rec.get("steps", 0))
         active.pop(slot, None)
         pending.pop(slot, None)
+        lat = measured.pop(slot, None)
+        if rec.get("status") in ("ok", "error"):
+            rec = dict(rec, policy_latency=policy_latency)
+            if lat:
+                rec["latency_s"] = {k: [round(v, 4) for v in vals] for k, vals in lat.items()}
         on_record(rec)
         prog.done += 1
         prog.successes += int(bool(rec.get("success")))
@@ -193,24 +208,42 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
                     active[slot] = starts[slot]
                     pending[slot] = obs
                 if not policy.env_side:
-                    policy.reset(sorted(starts))
+                    policy.reset(sorted(s for s in starts if s in active))
             commands: dict[int, np.ndarray | None] = {}
             aborts: dict[int, str] = {}
+            delays: dict[int, int] = {}
             ready = sorted(s for s in active if "unsupported" not in pending[s])
             if policy.env_side or not ready:
                 commands = {s: None for s in active}
+                if policy.env_side and policy_latency != "0":  # a privileged policy thinks in no time: measured = 0
+                    delays = {s: hold_steps(policy_latency, 0.0) for s in ready}
             else:
-                out = policy.act(backend.policy_input(ready, pending))
+                t0 = time.perf_counter()
+                try:
+                    out = policy.act(backend.policy_input(ready, pending))
+                except Exception as e:  # noqa: BLE001  a policy's failure fails these episodes, never the run
+                    from realm_ms.eval.policies.policy import PolicyOutput
+
+                    out = PolicyOutput(np.zeros((len(ready), 1, 8), np.float32), [f"{policy.spec()}: {type(e).__name__}: {e}"] * len(ready))
+                wall = time.perf_counter() - t0
+                actions, errors = check_output(out, len(ready), env_kwargs, policy.spec())
+                lat, servers = getattr(out, "latency_s", None), getattr(out, "servers", None)  # server policies time each row
+                lat = list(lat) if lat is not None and len(lat) == len(ready) else [wall] * len(ready)
+                servers = list(servers) if servers is not None and len(servers) == len(ready) else [policy.spec()] * len(ready)
                 for i, s in enumerate(ready):
-                    if out.errors and out.errors[i]:
-                        aborts[s] = out.errors[i]
-                    else:
-                        commands[s] = out.actions[i, :replan_every]
+                    if errors and errors[i]:
+                        aborts[s] = errors[i]
+                    else:  # a failed request's time (retries, timeouts) is not the policy's latency
+                        measured.setdefault(s, {}).setdefault(servers[i], []).append(lat[i])
+                        commands[s] = actions[i, :replan_every]
+                        if policy_latency != "0":
+                            delays[s] = hold_steps(policy_latency, lat[i])
                 commands.update({s: None for s in active if s not in ready})
             if aborts:
                 for slot, rec in backend.abort(aborts).items():
                     finish(slot, rec)
-            for slot, (obs, rec) in backend.step(commands).items():
+            stepped = backend.step(commands, delays) if any(delays.values()) else backend.step(commands)
+            for slot, (obs, rec) in stepped.items():
                 if rec is not None:
                     finish(slot, rec)
                 else:

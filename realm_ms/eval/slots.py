@@ -118,12 +118,14 @@ class CellSlots:
         self._frames(obs, list(eps))
         return self._observe(obs, list(keys))
 
-    def step(self, cmds: dict[int, np.ndarray | None], n: int | None = None) -> dict[int, tuple[dict | None, dict | None]]:
+    def step(self, cmds: dict[int, np.ndarray | None], n: int | None = None, delays: dict[int, int] | None = None) -> dict[int, tuple[dict | None, dict | None]]:
         """Execute each slot's chunk (at most ``n``, default ``replan_every`` steps; ``None``: the
-        env-side policy acts). Returns (observation, None) per slot, or (None, record) when finished."""
+        env-side policy acts), each after holding its previous target for ``delays[slot]`` steps
+        (the policy's latency). Returns (observation, None) per slot, or (None, record) when finished."""
         if self.unsupported:
             return {s: (None, self._finish(s, unsupported_record(self.cfg, self.eps[s].key, self.unsupported))) for s in cmds}
-        self.engine.run(n or self.cfg.replan_every, {s - self.first: a for s, a in cmds.items() if a is not None})
+        self.engine.run(n or self.cfg.replan_every, {s - self.first: a for s, a in cmds.items() if a is not None},
+                        {s - self.first: d for s, d in (delays or {}).items() if s in cmds})
         live = sorted(cmds)
         running = [s for s in live if not self.eps[s].done]
         views = self._observe(self.engine.obs, running) if running else {}
@@ -203,10 +205,11 @@ class EpisodeRunner:
         """Reset to ``key``; returns the first observation (``state`` (8,), ``images[cam]``, ...)."""
         return self.slots.start({0: key})[0]
 
-    def step(self, actions: np.ndarray | None = None, n: int | None = None) -> tuple[dict | None, dict | None]:
+    def step(self, actions: np.ndarray | None = None, n: int | None = None, delay: int = 0) -> tuple[dict | None, dict | None]:
         """Execute ``actions`` (T, 8) open-loop, at most ``n`` of them (default ``replan_every``), or
-        ``n`` env-side policy steps. Returns (observation, None) or (None, record) when finished."""
-        return self.slots.step({0: actions}, n)[0]
+        ``n`` env-side policy steps, after holding the previous target for ``delay`` steps. Returns
+        (observation, None) or (None, record) when finished."""
+        return self.slots.step({0: actions}, n, {0: delay})[0]
 
     def abort(self, error: str) -> dict:
         return self.slots.abort({0: error})[0]

@@ -13,7 +13,7 @@
 
 All backends share one protocol (``backend.Backend``): ``n_slots``, ``cell(slot)``, ``assign(free, queue)
 -> {slot: key}``, ``start({slot: key}) -> {slot: obs}``, ``policy_input(ready, pending)``,
-``step({slot: actions | None}) -> {slot: (obs, record)}``, ``abort({slot: msg}) -> {slot: record}``,
+``step({slot: actions | None}, {slot: delay steps}) -> {slot: (obs, record)}``, ``abort({slot: msg}) -> {slot: record}``,
 ``close()``. ``choose_backend`` maps ``--backend`` onto them through ``BACKENDS``.
 """
 
@@ -45,8 +45,8 @@ class InlineBackend(Backend):
     def start(self, starts: dict[int, EpisodeKey]) -> dict[int, dict]:
         return {s: self.runners[s].start(k) for s, k in starts.items()}
 
-    def step(self, commands: dict) -> dict:
-        return {s: self.runners[s].step(a) for s, a in commands.items()}
+    def step(self, commands: dict, delays: dict | None = None) -> dict:
+        return {s: self.runners[s].step(a, delay=(delays or {}).get(s, 0)) for s, a in commands.items()}
 
     def abort(self, aborts: dict[int, str]) -> dict:
         return {s: self.runners[s].abort(m) for s, m in aborts.items()}
@@ -112,7 +112,8 @@ def _worker_main(conn, cfg: RunConfig, parent_pid: int) -> None:
                 if cmd == "start":
                     send_obs(runner.start(arg))
                 elif cmd == "step":
-                    obs, rec = runner.step(arg)
+                    actions, delay = arg
+                    obs, rec = runner.step(actions, delay=delay)
                     if rec is not None:
                         conn.send(("record", None, rec))
                     else:
@@ -226,9 +227,9 @@ class ProcessBackend(Backend):
                 self.cells[s] = k.cell()
         return out
 
-    def step(self, commands: dict) -> dict:
+    def step(self, commands: dict, delays: dict | None = None) -> dict:
         for s, a in commands.items():
-            self.conns[s].send(("step", a))
+            self.conns[s].send(("step", (a, (delays or {}).get(s, 0))))
         out = {}
         for s in commands:
             kind, payload = self._recv(s)
@@ -361,7 +362,8 @@ def run_ray(keys: list[EpisodeKey], policy_spec: str, policy_options: dict, cfg:
         policy = make_policy(spec, **options)
         backend = InlineBackend(run_cfg, 1)
         try:
-            run_plan(cell_keys, policy, backend, recs.append, progress_bar=False, replan_every=run_cfg.replan_every)
+            run_plan(cell_keys, policy, backend, recs.append, progress_bar=False, replan_every=run_cfg.replan_every,
+                     policy_latency=run_cfg.policy_latency, env_kwargs=run_cfg.env_kwargs)
         finally:
             backend.close()
             policy.close()

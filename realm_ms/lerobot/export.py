@@ -350,6 +350,7 @@ def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]
                     if job.policy not in policies:
                         env.reset(seed=job.seed)
                         policies[job.policy] = make_export_policy(job.policy, env, job.replan_every)
+                        _check_joint_position(job.policy, policies[job.policy])
 
                     def on_frame(np_obs, action, progression, success, is_done, instruction):
                         writer.add(dataset_frame(np_obs, gripper_label(action, cfg.gripper_labels), progression, success,
@@ -383,6 +384,26 @@ def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]
     write_card(cfg, root)
     summary["total_episodes"] = writer.num_episodes
     return summary
+
+
+def _check_joint_position(spec: str, actor) -> None:
+    """The dataset's ``action`` is absolute joint targets (``droid_joint_pos``) and the export's env
+    runs in that space: a policy (server) that declares another action space is refused, never
+    written as if its velocities were joint targets."""
+    from realm_ms.errors import UserError
+    from realm_ms.eval.policies import policy_action_space
+
+    policy = getattr(actor, "policy", None)  # a ChunkedPolicy's realm eval policy
+    if policy is None or not hasattr(policy, "env_action_space"):
+        return
+    kw = policy_action_space(policy)
+    if kw:
+        from realm_ms.agents.droid_action_spaces import action_space_name
+
+        policy.close()
+        raise UserError(f"realm export --policy {spec}: the policy acts in {action_space_name(kw)} (its server declares it); "
+                        "a dataset stores absolute joint targets (joint_position), so export takes joint_position policies only; "
+                        "evaluate this one with `realm eval`")
 
 
 def export_dataset(cfg: ExportConfig) -> dict:

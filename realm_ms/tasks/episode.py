@@ -10,9 +10,12 @@ stage it stalled at). One slot is the case ``num_envs = 1``.
   (``options={"env_idx": rows}``), whose seed list carries every row's current episode seed, since
   ManiSkill sets the episode seeds of all sub-envs from it. A scene rebuilt every reset
   (``needs_reconfigure``) allows whole resets only: callers start such envs in waves.
-- ``run(n, chunks)`` steps up to ``n`` times: a row with an action chunk executes it open-loop; with
-  an ``actor`` (an env-side policy such as the scripted expert) the actor is asked every step; rows
-  without a running episode hold their last action.
+- ``run(n, chunks, delays)`` steps up to ``n`` times: a row with an action chunk executes it
+  open-loop; with an ``actor`` (an env-side policy such as the scripted expert) the actor is asked
+  every step; rows without a running episode hold their last action. ``delays[row] = k`` first holds
+  the row's previous joint target for k steps (the policy's latency: on the robot the arm keeps
+  tracking the last target while the policy thinks), then its chunk or actor starts; in a batch, a
+  row whose delay is shorter than the longest keeps its chunk's last action until the others end.
 - Stopping rules, per slot: termination (success + ``success_tail``), truncation, the episode's
   ``max_steps``, the end of the actor's script (``actor.done[row]``).
 - Sparse capture: an open-loop chunk is looked at after its last step only, so the steps before it
@@ -107,6 +110,7 @@ class EpisodeEngine:
         self.reset_once = False
         self.obs = None  # the env's latest (batched) observation
         self.hold = None  # (num_envs, dim) last applied action; None right after a whole reset
+        self.target = None  # (num_envs, 8) joint target of the last applied action (non-default action spaces)
 
     @property
     def whole_batch_resets(self) -> bool:
@@ -126,12 +130,14 @@ class EpisodeEngine:
         if whole:
             seed = self.seeds[0] if self.num_envs == 1 else list(self.seeds)
             obs, info = self.env.reset(seed=seed) if options is None else self.env.reset(seed=seed, options=options)
-            self.hold, self.episodes = None, [None] * self.num_envs
+            self.hold, self.target, self.episodes = None, None, [None] * self.num_envs
         else:
             idx = torch.as_tensor(rows, dtype=torch.long, device=self.u.device)
             obs, info = self.env.reset(seed=list(self.seeds), options={"env_idx": idx} | (options or {}))
             if self.hold is not None:  # the new rows keep still until they get actions
                 self.hold[idx] = self._still()[idx]
+            if self.target is not None:
+                self.target[rows] = self._state()[rows]
         self.reset_once, self.obs = True, obs
         if self.actor is not None and whole:
             self.actor.reset()
@@ -156,22 +162,31 @@ class EpisodeEngine:
     def running(self) -> list[int]:
         return [r for r, ep in enumerate(self.episodes) if ep is not None and not ep.done]
 
-    def run(self, n: int, chunks: dict[int, np.ndarray] | None = None) -> list[int]:
-        """Step up to ``n`` times (at most a chunk's length; stops early once every running episode
-        has ended); returns the rows whose episodes ended."""
+    def run(self, n: int, chunks: dict[int, np.ndarray] | None = None, delays: dict[int, int] | None = None) -> list[int]:
+        """Step up to ``n`` times (at most a chunk's length), after each row's delay (module
+        docstring); stops early once every running episode has ended; returns the rows whose
+        episodes ended."""
         chunks = {r: np.asarray(c, dtype=np.float32) for r, c in (chunks or {}).items()}
         n = min([n] + [len(c) for c in chunks.values()])
         live = self.running()
         if not live:
             return []
+        delays = {r: int(d) for r, d in (delays or {}).items() if d and int(d) > 0 and r in live}
+        total = n + max(delays.values(), default=0)
+        held = self._previous_targets() if delays else None
         sparse = self.actor is None and not self.every_frame
         ended: list[int] = []
-        for i in range(n):
+        for i in range(total):
             rows = [r for r in live if not self.episodes[r].done]
             if self.before_step is not None:
                 self.before_step(self.obs)
-            action = self._action(i, rows, chunks)
-            self.u.capture_sensors = not sparse or i == n - 1
+            waiting = [r for r in rows if i < delays.get(r, 0)]
+            action = self._action(i, rows, chunks, delays)
+            if waiting:
+                action = self._hold_targets(action, waiting, held)
+            self.u.capture_sensors = not sparse or i == total - 1
+            if self._conv() is not None and i == total - 1:  # the target a later delay holds
+                self.target = self._joint_target(action)
             try:
                 obs, _, term, trunc, info = self.env.step(action)
             finally:
@@ -195,21 +210,62 @@ class EpisodeEngine:
             self.hold = self._still()
         return self.hold
 
-    def _action(self, i: int, rows: list[int], chunks: dict[int, np.ndarray]) -> torch.Tensor:
+    def _action(self, i: int, rows: list[int], chunks: dict[int, np.ndarray], delays: dict[int, int] | None = None) -> torch.Tensor:
         idle = [r for r in range(self.num_envs) if r not in rows]
         if self.actor is not None:
-            a = self.actor.act(self.obs)
+            a = self.actor.act(self.obs) if any(i >= (delays or {}).get(r, 0) for r in rows) else self._held().clone()
             if idle:
                 mask = torch.zeros(self.num_envs, dtype=torch.bool, device=a.device)
                 mask[idle] = True
                 a = torch.where(mask[:, None], self._held().to(a.device), a)
             return a
+
+        def step_of(r: int) -> np.ndarray:  # after its delay; past its chunk's end, the chunk's last action
+            c = chunks[r]
+            return c[min(max(i - (delays or {}).get(r, 0), 0), len(c) - 1)]
+
         fed = [r for r in rows if r in chunks]
         if len(fed) == self.num_envs:  # every row has its action (one slot: always)
-            return torch.as_tensor(np.stack([chunks[r][i] for r in fed]), device=self.u.device)
+            return torch.as_tensor(np.stack([step_of(r) for r in fed]), device=self.u.device)
         a = self._held().clone()
         if fed:
-            a[torch.as_tensor(fed, device=a.device)] = torch.as_tensor(np.stack([chunks[r][i] for r in fed]), device=a.device)
+            a[torch.as_tensor(fed, device=a.device)] = torch.as_tensor(np.stack([step_of(r) for r in fed]), device=a.device)
+        return a
+
+    # ------------------------------------------------------------------ the policy's latency
+    def _conv(self):
+        return getattr(self.u, "droid_actions", None)  # the env's action-space converter (None: droid_joint_pos)
+
+    def _state(self) -> np.ndarray:
+        return self.u.agent.droid_state().detach().cpu().double().numpy()
+
+    def _joint_target(self, action: torch.Tensor) -> np.ndarray:
+        """(num_envs, 8) joint targets ``action`` asks for from the current state (as the env's converter)."""
+        from realm_ms.agents.droid_action_spaces import Q_LIMITS
+
+        conv, s = self._conv(), self._state()
+        t = conv.space.to_joint_target(action.detach().cpu().double().numpy().reshape(self.num_envs, -1), s[:, :7], s[:, 7], conv.ik)
+        t[:, :7] = np.clip(t[:, :7], Q_LIMITS[:, 0], Q_LIMITS[:, 1])
+        return t
+
+    def _previous_targets(self):
+        """What a delayed row holds: the last applied action (joint_position: it is the target), or,
+        in the other action spaces, the joint target it asked for (None: the state right after a reset)."""
+        if self._conv() is None:
+            return self._held().clone()
+        return self.target.copy() if self.target is not None else self._state()
+
+    def _hold_targets(self, action: torch.Tensor, rows: list[int], held) -> torch.Tensor:
+        """``action`` with ``rows`` holding their previous joint target, in the env's action space."""
+        a = action.clone()
+        idx = torch.as_tensor(rows, device=a.device)
+        conv = self._conv()
+        if conv is None:
+            a[idx] = held[idx].to(a.device, a.dtype)
+            return a
+        s = self._state()
+        hold = conv.space.from_joint_target(held[rows], s[rows, :7], s[rows, 7], conv.ik)
+        a[idx] = torch.as_tensor(hold, dtype=a.dtype, device=a.device)
         return a
 
     def _advance(self, rows: list[int], term, trunc, info) -> list[int]:

@@ -1,5 +1,5 @@
-"""Run the bad-input corpus (``bad_input_cases.py``, ``bad_input_cases_runs.py`` and
-``bad_input_cases_contracts.py``): a clear one-line
+"""Run the bad-input corpus (``bad_input_cases.py``, ``bad_input_cases_runs.py``,
+``bad_input_cases_contracts.py``, ``bad_input_cases_policy.py``): a clear one-line
 error with exit code 2, or accepted with its documented meaning; never a traceback, never a hang
 (every case has a timeout)."""
 
@@ -18,10 +18,11 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from bad_input_cases import CASES as BASE_CASES, Case  # noqa: E402
 from bad_input_cases_contracts import CASES as CONTRACT_CASES, make_files as make_contract_files  # noqa: E402
+from bad_input_cases_policy import CASES as POLICY_CASES  # noqa: E402
 from bad_input_cases_runs import CASES as RUN_CASES, make_files  # noqa: E402
 from bad_input_files import make_all  # noqa: E402
 
-CASES = BASE_CASES + RUN_CASES + CONTRACT_CASES
+CASES = BASE_CASES + RUN_CASES + CONTRACT_CASES + POLICY_CASES
 
 REPO = Path(__file__).resolve().parents[2]
 REALM = Path(sys.executable).parent / "realm"

@@ -23,7 +23,7 @@ POLICIES: Registry = Registry("policy")
 def _register_builtins() -> None:
     # importing a module registers its kinds (idempotent: modules import once); lerobot is imported
     # lazily inside its factory's policy class, so this stays light
-    from realm_ms.eval.policies import baselines, expert, lerobot, openpi  # noqa: F401
+    from realm_ms.eval.policies import baselines, expert, lerobot, openpi, roboarena  # noqa: F401
 
 
 def make_policy(spec: str, **options) -> Policy:
@@ -41,14 +41,18 @@ def policy_names() -> list[str]:
 
 def policy_action_space(policy: Policy, options: dict | None = None) -> dict:
     """Env keywords of the DROID action space ``policy`` acts in: its own declaration
-    (``env_action_space()``, e.g. an openpi server's metadata), else ``options["action_space"]``
-    (``SPACE[:GRIPPER]``, ``realm eval --action-space``); ``{}`` = joint_position."""
+    (``env_action_space()``, e.g. a policy server's metadata), else ``options["action_space"]``
+    (``SPACE[:GRIPPER]``, ``realm eval --action-space``); ``{}`` = joint_position. A server's bad
+    declaration is reported as the server's, never as a flag's."""
     from realm_ms.agents.droid_action_spaces import parse_action_space_flag
     from realm_ms.errors import UserError
+    from realm_ms.eval.policies.replies import ReplyError
 
     try:
         if hasattr(policy, "env_action_space"):
             return policy.env_action_space()
         return parse_action_space_flag((options or {}).get("action_space"))
+    except ReplyError as e:
+        raise UserError(str(e)) from None
     except ValueError as e:
         raise UserError(f"--action-space: {e}") from None

@@ -43,10 +43,14 @@ class PolicyInput:
 
 @dataclass
 class PolicyOutput:
-    """(B, T, 8) actions; ``errors[i]`` is a message when row i could not be served (that episode fails)."""
+    """(B, T, 8) actions; ``errors[i]`` is a message when row i could not be served (that episode
+    fails); ``latency_s[i]`` the wall time of row i's request and ``servers[i]`` who served it
+    (server policies; otherwise the driver times ``act`` itself)."""
 
     actions: np.ndarray
     errors: list[str | None] | None = None
+    latency_s: list[float] | None = None
+    servers: list[str] | None = None
 
 
 class PolicyError(RuntimeError):
