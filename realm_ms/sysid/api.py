@@ -23,12 +23,20 @@ from realm_ms.validate import InputError, check_int, check_non_negative, check_p
 MIN_SYNTH_DURATION_S = 2.0
 
 
-def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3) -> tuple[list[Trajectory], list[Trajectory]]:
+def _read_options(command: str | None):
+    """``--command MODE[:SPACE]``: how a DROID log's command becomes joint targets (``droid_formats.py``)."""
+    from realm_ms.sysid.droid_formats import ReadOptions
+
+    return ReadOptions.parse(command)
+
+
+def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3,
+           command: str | None = None) -> tuple[list[Trajectory], list[Trajectory]]:
     if isinstance(data, tuple):
         return data
     from realm_ms.sysid.data_io import load_split
 
-    return load_split(data, heldout, seed, heldout_fraction)
+    return load_split(data, heldout, seed, heldout_fraction, _read_options(command))
 
 
 def _space(trajs: list[Trajectory], space: str | None) -> str:
@@ -127,16 +135,17 @@ def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, 
 
 
 def compare(data, model=None, heldout=None, workers=None, device=None, segment_s: float = 8.0,
-            space: str | None = None) -> dict:
+            space: str | None = None, command: str | None = None) -> dict:
     """Replay DATA (all trajectories; plus ``heldout`` if given) with the model."""
     from realm_ms.sysid.data_io import load_dir
     from realm_ms.sysid.fit import compare as _compare
 
     check_positive(segment_s, "segment_s (--segment)", "s")
     m = _model(model)
-    trajs = data if isinstance(data, list) else load_dir(data)
+    opts = _read_options(command)
+    trajs = data if isinstance(data, list) else load_dir(data, options=opts)
     if heldout is not None:
-        trajs = trajs + load_dir(heldout)
+        trajs = trajs + load_dir(heldout, options=opts)
     if _space(trajs, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
@@ -147,10 +156,10 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
 
 
 def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print,
-             space: str | None = None, **config) -> dict:
+             space: str | None = None, command: str | None = None, **config) -> dict:
     from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose as _diagnose
 
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
@@ -166,7 +175,8 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
 
 
 def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None,
-        device=None, progress: bool = True, log=print, space: str | None = None, **config) -> dict:
+        device=None, progress: bool = True, log=print, space: str | None = None, command: str | None = None,
+        **config) -> dict:
     from datetime import datetime, timezone
 
     from realm_ms.sysid.fit import FitConfig, fit as _fit
@@ -182,7 +192,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(out, "out (--out)")  # before the fit, not after it
     if config.get("checkpoint"):
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
@@ -212,7 +222,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
 
 
 def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None, device=None,
-         progress: bool = True, log=print, space: str | None = None, **config) -> dict:
+         progress: bool = True, log=print, space: str | None = None, command: str | None = None, **config) -> dict:
     """diagnose -> fit the top suspect -> re-diagnose ... until the floor (``sysid/auto.py``)."""
     from datetime import datetime, timezone
 
@@ -224,7 +234,7 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
             check_int(config[key], f"{key} (--{key.replace('_', '-')})", minimum=1)
     if out is not None:
         check_output_file(out, "out (--out)")
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
@@ -247,12 +257,13 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
 
 
 def report(data, model=None, out: str | Path = "report.html", heldout=None, seed: int = 0, diagnosis=None,
-           fit_result=None, workers=None, device=None, waterfall: bool = True, log=print, auto_result=None) -> Path:
+           fit_result=None, workers=None, device=None, waterfall: bool = True, log=print, auto_result=None,
+           command: str | None = None) -> Path:
     from realm_ms.sysid.report import build_report
     from realm_ms.validate import check_output_file
 
     check_output_file(out, "out (--out)")
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
         from realm_ms.sysid.report.torque_report import build_torque_report

@@ -179,7 +179,8 @@ def _compare(args) -> int:
     _check_outputs(args, files=("--json",))
     _check_model(args)
     with _user_input():
-        c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space)
+        c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space,
+                        command=args.command)
     names = [f"J{i}" for i in range(1, 8)]
     if c["unit"] == "N·m":
         print(f"torque space ({c['samples']} samples): inverse-dynamics residual RMSE {c['rmse_nm']:.3e} N·m, "
@@ -215,7 +216,7 @@ def _diagnose(args) -> int:
     _check_model(args)
     with _user_input():
         d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
-                         log=lambda m: print(m, file=sys.stderr), space=args.space, **kw)
+                         log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw)
     b = d["baseline"]
     u, sfx = ("N·m", "nm") if d.get("unit") == "N·m" else ("rad", "rad")
     print(f"baseline held-out RMSE {b[f'heldout_rmse_{sfx}']:.3e} {u}, noise floor ≈ {b[f'noise_floor_{sfx}']:.2e} {u}")
@@ -242,7 +243,8 @@ def _fit(args) -> int:
         f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                     generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
-                    noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space)
+                    noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space,
+                    command=args.command)
     print(f"fitted {', '.join(f['effects'])} -> {args.out}")
     torque = f.get("unit") == "N·m"  # torque space reports N·m (and its params carry no unit table)
     unit, key, fmt, train_fmt = ("N·m", "nm", "9.3f", ".3f") if torque else ("rad", "rad", "9.2e", ".2e")
@@ -279,7 +281,8 @@ def _auto(args) -> int:
     with _user_input():
         a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                      progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
-                     generations=args.generations, max_steps=args.max_steps, space=args.space)
+                     generations=args.generations, max_steps=args.max_steps, space=args.space,
+                     command=args.command)
     f = a["final"]
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")
@@ -302,7 +305,7 @@ def _report(args) -> int:
     with _user_input():
         p = api.report(args.data, args.model, args.out, args.heldout, args.seed, args.diagnosis, args.fit,
                        args.workers, args.device, waterfall=not args.no_waterfall, log=lambda m: print(m, file=sys.stderr),
-                       auto_result=args.auto)
+                       auto_result=args.auto, command=args.command)
     print(f"wrote {p}")
     return 0
 
@@ -321,6 +324,11 @@ def _common(p: argparse.ArgumentParser, heldout: bool = True) -> None:
                    help="CPU worker processes, integer >= 1 (default: $REALM_SYSID_WORKERS or min(2, cores))")
     p.add_argument("--device", choices=["cpu", "cuda"], default=None,
                    help="simulation device (default: cuda if a GPU is available, else cpu)")
+    p.add_argument("--command", metavar="MODE[:SPACE]", default=None,
+                   help="how a DROID log's command becomes joint targets: logged (its joint target), rebuild "
+                        "(converted at the measured state), closed_loop (converted at the simulated state inside "
+                        "the replay), auto (default: logged if there, else rebuild); SPACE picks the logged "
+                        "action space (e.g. rebuild:cartesian_position)")
 
 
 def _space_arg(p: argparse.ArgumentParser) -> None:

@@ -206,10 +206,12 @@ class MujocoReference:
 
     # ------------------------------------------------------------------ rollout
     def rollout(self, q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray, effects: list | None = None,
-                record_every: int = 1) -> np.ndarray:
+                record_every: int = 1, step_command=None) -> np.ndarray:
         """Simulate E arms from (q0, qd0) tracking ``cmd`` (E, S, 7), one target per law tick.
 
         ``effects`` (``law="driver"`` only): actuation stages with theta of E rows or 1.
+        ``step_command``: a ``closed_loop.ClosedLoopCommand`` (targets from the arms' joints at each
+        command switch replace ``cmd`` from an arm's first switch on; the simulator's convention).
         Returns joint positions (E, S + 1, 7) after 0..S ticks (float64).
         """
         import mujoco
@@ -235,7 +237,13 @@ class MujocoReference:
         jacp, jacr = np.zeros((3, self.nv)), np.zeros((3, self.nv))
         sub = self.config.substeps
         friction_in_driver = driver is not None
+        if step_command is not None:
+            cmd = np.array(cmd, dtype=np.float64)  # closed-loop targets are written into it
         for k in range(steps):
+            if step_command is not None:
+                hit = step_command(k, out[:, k])
+                if hit is not None:
+                    cmd[hit[0], k:] = hit[1][:, None]
             if driver is not None:
                 tau_all = self._driver_torque(driver, datas, cmd[:, k])
             for i, (m, d) in enumerate(datas):

@@ -74,6 +74,7 @@ class SegmentSet:
     mask: np.ndarray  # (N, L) bool, scored samples
     sample_idx: np.ndarray  # (N, L) sample index into the trajectory (-1 = padding)
     saturated_fraction: float = 0.0  # share of the scorable samples left out as torque-saturated (``saturation.py``)
+    closed: object | None = None  # ``closed_loop.ClosedLoopCommand`` per segment (``--command closed_loop``)
 
     @property
     def n(self) -> int:
@@ -154,7 +155,10 @@ class SegmentSet:
         if (mask & unsat).any():  # a log saturated throughout is scored whole rather than not at all
             left_out = 1.0 - (mask & unsat).sum() / mask.sum()
             mask &= unsat
-        return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx, float(left_out))
+        from realm_ms.sysid.closed_loop import from_segments
+
+        return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx, float(left_out),
+                   from_segments(trajs, segs, dt))
 
     @classmethod
     def stack(cls, sets: list["SegmentSet"]) -> "SegmentSet":
@@ -184,9 +188,11 @@ class SegmentSet:
             trajs += s.trajs
         scored = [s.mask.sum() for s in sets]
         left_out = sum(s.saturated_fraction * m for s, m in zip(sets, scored)) / max(sum(scored), 1)
+        from realm_ms.sysid.closed_loop import from_segments
+
         return cls(trajs, segs, sets[0].dt, np.concatenate([s.q0 for s in sets]), np.concatenate([s.qd0 for s in sets]),
                    cat("cmd", n_steps), cat("pos", n_samp), cat("meas", n_samp, 0.0), cat("mask", n_samp, False),
-                   cat("sample_idx", n_samp, -1), float(left_out))
+                   cat("sample_idx", n_samp, -1), float(left_out), from_segments(trajs, segs, sets[0].dt))
 
     @staticmethod
     def split(sets: list["SegmentSet"], sim: np.ndarray, n_candidates: int) -> list[np.ndarray]:

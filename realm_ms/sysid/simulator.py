@@ -118,10 +118,12 @@ class ReplaySimulator:
 
     # ------------------------------------------------------------------ rollout
     def rollout(self, q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray, effects: list[Effect],
-                record_every: int = 1) -> np.ndarray:
+                record_every: int = 1, step_command=None) -> np.ndarray:
         """Simulate E arms from (q0, qd0) tracking ``cmd`` (E, S, 7) (one target per physics step).
 
-        ``effects``: stages with theta of shape (E, n) or (1, n). Returns joint positions
+        ``effects``: stages with theta of shape (E, n) or (1, n). ``step_command``: a
+        ``closed_loop.ClosedLoopCommand`` whose targets, computed from the simulated joints at each
+        command switch, replace ``cmd`` from an arm's first switch on. Returns joint positions
         (E, S + 1, 7) after 0..S steps (float64).
         """
         e_count, steps = cmd.shape[0], cmd.shape[1]
@@ -153,6 +155,8 @@ class ReplaySimulator:
         prof.build_s += time.perf_counter() - t0
         qbuf = q0.astype(np.float32).copy()
         vbuf = qd0.astype(np.float32).copy()
+        closed = np.zeros(e_count, bool)
+        closed_target = torch.zeros((e_count, 7), dtype=torch.float32)
         bar = None
         if self.show_progress and e_count * steps > 150_000:
             from tqdm.auto import tqdm
@@ -163,7 +167,15 @@ class ReplaySimulator:
                 if bar is not None and k % 40 == 0:
                     bar.update(min(40, steps - k))
                 b = time.perf_counter()
-                driver.set_target(cmd_t[:, k])
+                target = cmd_t[:, k]
+                if step_command is not None:
+                    hit = step_command(k, qbuf)
+                    if hit is not None:
+                        closed[hit[0]] = True
+                        closed_target[hit[0]] = torch.as_tensor(hit[1], dtype=torch.float32)
+                    if closed.any():
+                        target = torch.where(torch.from_numpy(closed)[:, None], closed_target, target)
+                driver.set_target(target)
                 tau = driver.torque(torch.from_numpy(qbuf), torch.from_numpy(vbuf), self.dt).numpy()
                 c = time.perf_counter()
                 for i, art in enumerate(arms):
