@@ -232,3 +232,32 @@ def align(episodes: list[DroidEpisode], model=None, model_name: str | None = Non
     labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
     name = model_name or (str(model) if model is not None and not isinstance(model, dict) else "nominal")
     return AlignmentResult(name, rows, labs, summarize("all", rows), time.perf_counter() - t0)
+
+
+# ---------------------------------------------------------------------------- the workbench's npz
+def rebuilt_joint_targets(ep: DroidEpisode, ik=None) -> np.ndarray:
+    """(T, 7) the joint targets DROID streamed, rebuilt from the *measured* state: each step's
+    ``cartesian_position`` command through DROID's conversion at ``q[t]`` (up to its IK's
+    null-space choice), clipped to the joint limits."""
+    from realm_ms.agents.droid_action_spaces import Q_LIMITS, DroidIK, make_action_space
+
+    space = make_action_space("cartesian_position", "position")
+    a = np.concatenate([ep.cartesian_cmd, np.zeros((ep.steps, 1))], 1)
+    t = space.to_joint_target(a, ep.q, np.zeros(ep.steps), ik or DroidIK())[:, :7]
+    return np.clip(t, Q_LIMITS[:, 0], Q_LIMITS[:, 1])
+
+
+def write_workbench_npz(episodes: list[DroidEpisode], out_dir: str | Path) -> list[Path]:
+    """One ``realm sysid`` npz per episode (``t``, ``q``, ``q_cmd`` from ``rebuilt_joint_targets``,
+    ``gripper``, ``control_hz``)."""
+    from realm_ms.agents.droid_action_spaces import DroidIK
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ik, paths = DroidIK(), []
+    for ep in episodes:
+        p = out / f"{ep.name}.npz"
+        np.savez(p, t=np.arange(ep.steps) / ep.control_hz, q=ep.q, q_cmd=rebuilt_joint_targets(ep, ik),
+                 gripper=ep.gripper, control_hz=ep.control_hz)
+        paths.append(p)
+    return paths
