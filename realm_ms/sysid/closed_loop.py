@@ -8,9 +8,10 @@ lags or leads get its own corrections, as a robot with that dynamics would have:
 as on the robot, and the conversion (IK) runs on the simulated joints.
 
 One :class:`ClosedLoopCommand` holds every arm's commands (E arms, K commands each, the physics
-step at which each starts); a rollout calls it at every physics step with the arms' joint
-positions and gets the rows whose command switched and their new joint targets. Arms before
-their first switch track the rollout's ordinary ``cmd``.
+step at which each starts); called at every physics step with the arms' joint positions it gives
+the rows whose command switched and their new joint targets. ``bind`` turns it into the
+``cmd(k, q)`` function the rollouts (``ReplaySimulator``, ``MujocoReference``) track; arms before
+their first switch track the ordinary per-step ``cmd``.
 
 ``reference=True`` is the synthetic teleoperator (``synth_droid``): the commands are joint
 *references*, and at each switch the action in ``action_space`` that asks for the reference from
@@ -99,6 +100,25 @@ class ClosedLoopCommand:
         self.sent[rows, j] = a
         self.targets[rows, j] = tgt
         return rows, tgt
+
+
+def bind(closed: ClosedLoopCommand | None, cmd: np.ndarray):
+    """What a rollout tracks: ``cmd`` (E, S, 7) itself, or with ``closed`` a function
+    ``(k, q) -> (E, 7)`` (the rollouts' closed-loop form) giving ``cmd``'s target until an arm's
+    first command switch and the closed-loop target from then on."""
+    if closed is None:
+        return cmd
+    active = np.zeros(cmd.shape[0], bool)
+    over = np.zeros((cmd.shape[0], 7))
+
+    def target(k: int, q: np.ndarray) -> np.ndarray:
+        hit = closed(k, q)
+        if hit is not None:
+            active[hit[0]] = True
+            over[hit[0]] = hit[1]
+        return np.where(active[:, None], over, cmd[:, k])
+
+    return target
 
 
 def from_segments(trajs, segments, dt: float) -> ClosedLoopCommand | None:

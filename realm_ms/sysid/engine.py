@@ -51,8 +51,10 @@ def _worker_init(config: SimConfig) -> None:
 
 
 def _worker_run(args):
+    from realm_ms.sysid.closed_loop import bind
+
     q0, qd0, cmd, specs, closed = args
-    return _WORKER_SIM.rollout(q0, qd0, cmd, _effects_from_specs(specs), step_command=closed)
+    return _WORKER_SIM.rollout(q0, qd0, bind(closed, cmd), _effects_from_specs(specs), steps=cmd.shape[1])
 
 
 def _theta_rows(fx: Effect, rows) -> np.ndarray:
@@ -228,13 +230,13 @@ class Evaluator:
         self.close()
 
     # ------------------------------------------------------------------ core
-    def rollout(self, q0, qd0, cmd, effects: list[Effect], step_command=None) -> np.ndarray:
+    def rollout(self, q0, qd0, cmd, effects: list[Effect], closed=None) -> np.ndarray:
         """Batched rollout (E arms) -> (E, S + 1, 7); effects' theta has E rows or 1. Each distinct
         arm (``arm_keys``) is simulated once, and not at all when the cache holds it.
-        ``step_command``: closed-loop DROID commands (``closed_loop.py``), E rows."""
+        ``closed``: closed-loop DROID commands (``closed_loop.ClosedLoopCommand``), E rows."""
         keys = arm_keys(q0, qd0, cmd, effects)
-        if step_command is not None:
-            keys = [k + step_command.key(i) for i, k in enumerate(keys)]
+        if closed is not None:
+            keys = [k + closed.key(i) for i, k in enumerate(keys)]
         rows = {k: self.cache.get(k) for k in keys}
         todo = list(dict.fromkeys(k for k in keys if rows[k] is None))
         self.cache.hits += len(keys) - len(todo)
@@ -245,8 +247,8 @@ class Evaluator:
                 first_of.setdefault(k, i)
             first = np.array([first_of[k] for k in todo])
             sub = _effects_from_specs([_spec(fx, _theta_rows(fx, first)) for fx in effects])
-            closed = None if step_command is None else step_command.rows(first)
-            for k, row in zip(todo, self._simulate(q0[first], qd0[first], cmd[first], sub, closed)):
+            sub_closed = None if closed is None else closed.rows(first)
+            for k, row in zip(todo, self._simulate(q0[first], qd0[first], cmd[first], sub, sub_closed)):
                 rows[k] = row
                 self.cache.put(k, row)
         return np.stack([rows[k] for k in keys])
@@ -276,7 +278,9 @@ class Evaluator:
         if self.workers > 1 and len(tasks) > 1:
             parts = list(self._pool_get().map(_worker_run, tasks))
         else:
-            parts = [self.sim.rollout(q, v, c, _effects_from_specs(s), step_command=cl) for q, v, c, s, cl in tasks]
+            from realm_ms.sysid.closed_loop import bind
+
+            parts = [self.sim.rollout(q, v, bind(cl, c), _effects_from_specs(s), steps=c.shape[1]) for q, v, c, s, cl in tasks]
         out = np.empty((e_count, *parts[0].shape[1:]), parts[0].dtype)
         for rows, part in zip(chunks, parts):
             out[rows] = part

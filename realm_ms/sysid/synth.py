@@ -127,7 +127,7 @@ def simulate_droid(model: RobotModel, references: list[np.ndarray], action_space
     ``action_space`` that asks for the step's joint reference from the arm's state, and DROID's
     conversion turns it into the joint target the controller tracks (``closed_loop.py``, reference
     mode). Returns (t, q, actions, joint targets) per trajectory, one sample per command."""
-    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand
+    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.replay import held_commands
     from realm_ms.sysid.simulator import SimConfig
@@ -147,7 +147,7 @@ def simulate_droid(model: RobotModel, references: list[np.ndarray], action_space
     cmd = np.stack([held_commands(np.r_[0.0, t + settle_s], np.vstack([r[:1], r]), steps, dt) for t, r in zip(ts, references)])
     q0 = np.stack([r[0] for r in references])
     sim = getattr(ev, "sim", ev)  # the simulator itself: the closed loop records what it sent
-    hist = sim.rollout(q0, np.zeros_like(q0), cmd, model.actuation().stages, step_command=closed)
+    hist = sim.rollout(q0, np.zeros_like(q0), bind(closed, cmd), model.actuation().stages, steps=cmd.shape[1])
     out = []
     for i, (t, r) in enumerate(zip(ts, references)):
         pos = (t + settle_s) / dt  # the state each command was computed from: the sample at its switch
