@@ -168,3 +168,36 @@ def test_workbench_names_and_fits_a_hidden_delay_and_softer_gains(tmp_path):
     assert p["latency.delay"] == pytest.approx(0.06, rel=0.2)
     assert p["gain_mismatch.stiffness_error"] == pytest.approx(-0.3, rel=0.2)
     assert f.after["heldout_rmse_rad"] < 0.1 * f.before["heldout_rmse_rad"]
+
+
+def test_grasps_and_stalls_are_masked_and_counted():
+    """A gripper stopped half closed (an object in it) and an arm held still while its target is
+    5 cm away (pushing on something) are left out of the score, and the share is reported."""
+    from realm_ms.agents.droid_action_spaces import DroidIK
+    from realm_ms.sysid.interaction import detect
+    from realm_ms.sysid.replay import SegmentSet
+    from realm_ms.sysid.timeseries import Trajectory
+
+    n = 90
+    t = np.arange(n) / 15.0
+    home = np.array([0.0, -0.6, 0.0, -2.2, 0.0, 1.6, 0.8])
+    q = home + 0.2 * np.sin(np.linspace(0, 3, n))[:, None] * np.array([1, 0.5, 0, 0.5, 0, 0.5, 0])
+    q_cmd = np.vstack([q[1:], q[-1:]])  # tracking: one step ahead
+    grip = np.zeros(n)
+    grip[20:40] = 0.5  # closed on an object
+    q[60:75] = q[60]  # held still ...
+    ik = DroidIK()
+    p = ik.pose(q[60:61])
+    p[0, 2] -= 0.05  # ... while commanded 5 cm lower (pressing on the table)
+    from realm_ms.sysid.droid_formats import rebuild_targets
+
+    q_cmd[60:75] = rebuild_targets("cartesian_position", np.repeat(p, 15, 0), q[60:75], None)
+    tr = Trajectory("contact", t, q, q_cmd, gripper=grip)
+    hit = detect(tr, ik)
+    assert hit.grasp[22:38].all() and not hit.grasp[:15].any() and not hit.grasp[45:].any()
+    assert hit.stall[62:73].all() and not hit.stall[:55].any() and not hit.stall[80:].any()
+    ss = SegmentSet.build([tr], length_s=8.0, burn_in_s=1.0)
+    assert 0.3 < ss.interaction_fraction < 0.7 and tr.meta["interaction"]["grasp"] > 0.2
+    assert not ss.mask[0][np.isin(ss.sample_idx[0], np.flatnonzero(hit.masked))].any()
+    free = Trajectory("free", t, q * 0 + home, np.tile(home, (n, 1)), gripper=np.zeros(n))
+    assert SegmentSet.build([free], length_s=8.0, burn_in_s=1.0).interaction_fraction == 0.0

@@ -194,6 +194,11 @@ def _compare(args) -> int:
     print("joint      " + " ".join(f"{n:>9}" for n in names))
     print("RMSE [rad] " + " ".join(f"{v:9.2e}" for v in c["per_joint_rmse_rad"]))
     print("max  [rad] " + " ".join(f"{v:9.2e}" for v in c["per_joint_max_abs_error_rad"]))
+    if c.get("interaction_fraction"):
+        print(f"grasps and stalls against the scene (not modelled by an arm-only replay): {c['interaction_fraction']:.1%} "
+              "of the scored samples simulated but not scored; per trajectory: "
+              + ", ".join(f"{t['name']} {t['masked']['masked']:.0%}" for t in c["trajectories"] if t.get("masked")
+                          and t["masked"]["masked"] > 0))
     worst = sorted(c["trajectories"], key=lambda t: -(t["rmse_rad"] or 0))[:3]
     print("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
     _write_json(args.json, c)

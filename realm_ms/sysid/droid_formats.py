@@ -294,13 +294,14 @@ def read_file(path: Path) -> DroidLog:
 # ---------------------------------------------------------------------------- commands -> joint targets
 def rebuild_targets(space: str, actions: np.ndarray, q: np.ndarray, g: np.ndarray | None, gripper_space: str = "position",
                     ik=None) -> np.ndarray:
-    """(T, 7) joint targets: DROID's conversion of each step's arm command at the measured joints."""
-    from realm_ms.agents.droid_action_spaces import make_action_space
+    """(T, 7) joint targets: DROID's conversion of each step's arm command at the measured joints,
+    clipped to the joint limits as the benchmark env clips a converted action."""
+    from realm_ms.agents.droid_action_spaces import Q_LIMITS, make_action_space
 
     sp = make_action_space(space, gripper_space)
     g = np.zeros(len(q)) if g is None else g
     a = np.concatenate([actions, np.zeros((len(actions), 1))], 1)
-    return sp.to_joint_target(a, q, g, ik)[:, :7]
+    return np.clip(sp.to_joint_target(a, q, g, ik)[:, :7], Q_LIMITS[:, 0], Q_LIMITS[:, 1])
 
 
 def _gripper_target(log: DroidLog) -> np.ndarray | None:
