@@ -1,4 +1,4 @@
-"""``realm sysid {effects,excite,synth,compare,diagnose,fit,auto,report}``.
+"""``realm sysid {effects,excite,synth,compare,diagnose,fit,auto,report,align}``.
 
 Registered by ``realm_ms/cli.py`` through ``add_parser(subparsers)``; heavy imports stay inside
 the handlers. Bad input raises ``realm_ms.cli.UserError`` (one clear message, no traceback).
@@ -315,6 +315,29 @@ def _report(args) -> int:
     return 0
 
 
+def _align(args) -> int:
+    import numpy as np
+
+    from realm_ms.sysid import api
+
+    _check_data(args.data)
+    _check_outputs(args, files=("--out", "--json"))
+    _check_model(args)
+    with _user_input():
+        a = api.align(args.data, args.model, args.out, args.command, waterfall=not args.no_waterfall,
+                      log=lambda m: print(m, file=sys.stderr))
+    print(f"{'robot':<40} {'flange mm':>9} {'free mm':>8} {'lag sim':>7} {'b sim':>6}   (real: lag "
+          f"{a['runs'][0]['overall']['lag_real']:.1f}, b {a['runs'][0]['overall']['b_real']:.2f})")
+    for r in a["runs"]:
+        o = r["overall"]
+        print(f"{r['label'][:40]:<40} {o['flange_mm']:>9.1f} {r['free_flange_mm']:>8.1f} {o['lag_sim']:>7.1f} {o['b_sim']:>6.2f}")
+    masked = [e["masked"] for e in a["runs"][0]["episodes"]]
+    print(f"grasps/stalls masked: {np.mean(masked):.0%} of steps on average; {len(a['skipped'])} episode(s) left out")
+    _write_json(args.json, a)
+    print(f"wrote {args.out}")
+    return 0
+
+
 # ---------------------------------------------------------------------------- parser
 def _common(p: argparse.ArgumentParser, heldout: bool = True) -> None:
     from realm_ms.validate import integer
@@ -437,6 +460,18 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--no-waterfall", action="store_true", help="skip the effect-by-effect held-out waterfall")
     s.add_argument("--auto", metavar="FILE", help="auto --json output to include (its waterfall)")
     s.set_defaults(func=_report)
+
+    s = sub.add_parser("align", help="alignment report of DROID episodes: closed-loop replay, flange error, lag and "
+                                     "response per episode and lab, before and after a robot model (HTML)")
+    s.add_argument("data", metavar="DATA", help="DROID episodes: a directory of .npz/.json/.csv dumps or "
+                   "*/trajectory.h5, or a LeRobot dataset (index.json with file -> lab names the labs)")
+    s.add_argument("--out", required=True, metavar="FILE.html", help="HTML file to write (not a directory)")
+    s.add_argument("--model", metavar="MODEL.yaml", help="robot model to compare with the nominal robot")
+    s.add_argument("--command", metavar="MODE[:SPACE]", default=None,
+                   help="how commands become joint targets (default closed_loop; see `realm sysid compare --help`)")
+    s.add_argument("--no-waterfall", action="store_true", help="only nominal and the model, not its effects one at a time")
+    s.add_argument("--json", metavar="FILE", help="write the numbers as JSON")
+    s.set_defaults(func=_align)
 
     s = sub.add_parser("auto", help="diagnose, fit the top suspect, re-diagnose ... until the noise floor")
     s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")

@@ -268,6 +268,43 @@ def load_dir(path: str | Path, limits: np.ndarray | None = None, options=None) -
     return [validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}") for tr in raw]
 
 
+def load_each(path: str | Path, options=None) -> tuple[list[Trajectory], list[str]]:
+    """Like ``load_dir``, but an episode that fails to read or validate is set aside, not fatal:
+    (trajectories, one line per episode left out). For a set of real episodes where one bad log
+    should not hide the others (``realm sysid align``)."""
+    root = Path(path)
+    if not root.exists():
+        raise DataError(f"{root}: no such file or directory")
+    limits = joint_limits()
+    if root.is_dir() and (root / "meta" / "info.json").exists():
+        raw = read_lerobot(root, options)
+    else:
+        files = [root] if root.is_file() else _files(root)
+        if not files:
+            raise DataError(f"{root}: no .npz, .json, .csv or */trajectory.h5 trajectories and no LeRobot dataset "
+                            "(meta/info.json) here")
+        raw, skipped = [], []
+        for f in files:
+            try:
+                raw.append(read_trajectory_file(f, options))
+            except DataError as e:
+                skipped.append(str(e))
+        return _validated(raw, limits, root, skipped)
+    return _validated(raw, limits, root, [])
+
+
+def _validated(raw: list[Trajectory], limits, root: Path, skipped: list[str]) -> tuple[list[Trajectory], list[str]]:
+    out = []
+    for tr in raw:
+        try:
+            out.append(validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}"))
+        except DataError as e:
+            skipped.append(str(e))
+    if not out:
+        raise DataError(f"{root}: no usable trajectory; " + ("; ".join(skipped[:3]) or "none found"))
+    return out, skipped
+
+
 def load_split(data: str | Path, heldout: str | Path | None = None, seed: int = 0,
                heldout_fraction: float = 0.3, options=None) -> tuple[list[Trajectory], list[Trajectory]]:
     """(train, held-out): ``--heldout DIR`` if given, ``DATA/train`` + ``DATA/heldout`` if present,
