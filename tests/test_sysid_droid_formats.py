@@ -221,7 +221,7 @@ def test_align_report_on_droid_episodes(tmp_path, ev):
     assert "left out" in r.stderr and "short.npz" in r.stderr
     a = json.loads((tmp_path / "a.json").read_text())
     nominal, truth = a["runs"][0]["overall"], a["runs"][-1]["overall"]
-    assert [x["label"] for x in a["runs"]] == ["nominal", "+ latency", str(tmp_path / "truth.yaml")]
+    assert [x["label"] for x in a["runs"]] == ["nominal", "+ latency", "truth.yaml"]
     assert truth["flange_mm"] < 1.0 and nominal["flange_mm"] > 5 * truth["flange_mm"]
     assert truth["lag_sim"] == truth["lag_real"] and abs(truth["b_sim"] - truth["b_real"]) < 0.15 * truth["b_real"]
     assert nominal["b_sim"] > 1.3 * nominal["b_real"] and nominal["lag_sim"] < nominal["lag_real"]

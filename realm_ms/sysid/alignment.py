@@ -189,33 +189,24 @@ def compare_episode(ep: DroidEpisode, q_sim: np.ndarray, ik=None) -> EpisodeAlig
 def replay_closed_loop(episodes: list[DroidEpisode], model=None, sim=None) -> list[np.ndarray]:
     """Simulated joints (T, 7) per episode: all episodes as arms of one batch, each step's
     ``cartesian_position`` command turned into a joint target from the simulated state (DROID's
-    IK, targets clipped to the joint limits), held for the control period. ``model``: a robot model
-    (path, dict, ``RobotModel``; None = the nominal robot)."""
-    from realm_ms.agents.droid_action_spaces import Q_LIMITS, DroidIK, make_action_space
+    IK, targets clipped to the joint limits; ``closed_loop.ClosedLoopCommand``), held for the
+    control period; a finished episode holds its last target. ``model``: a robot model (path,
+    dict, ``RobotModel``; None = the nominal robot)."""
     from realm_ms.agents.robot_model import load_robot_model
+    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
     from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
 
     model = load_robot_model(model)
     sim = sim or ReplaySimulator(SimConfig.from_model(model))
     sub = int(round(model.physics_hz / episodes[0].control_hz))
-    space, ik = make_action_space("cartesian_position", "position"), DroidIK()
     lengths = np.array([e.steps for e in episodes])
     steps = int(lengths.max())
+    k = np.arange(steps)[None]
+    switch = np.where(k < lengths[:, None], k * sub, NEVER)
     cmds = np.stack([np.concatenate([e.cartesian_cmd, np.repeat(e.cartesian_cmd[-1:], steps - e.steps, 0)]) for e in episodes])
-    actions = np.concatenate([cmds, np.zeros((len(episodes), steps, 1))], 2)
-    target = np.zeros((len(episodes), 7))
-
-    def command(k: int, q: np.ndarray) -> np.ndarray:
-        if k % sub == 0:  # a new command from the state the step starts at
-            i = k // sub
-            live = i < lengths  # finished episodes hold their last target
-            if live.any():
-                t = space.to_joint_target(actions[live, i], q[live], np.zeros(int(live.sum())), ik)[:, :7]
-                target[live] = np.clip(t, Q_LIMITS[:, 0], Q_LIMITS[:, 1])
-        return target
-
     q0 = np.stack([e.q[0] for e in episodes])
-    out = sim.rollout(q0, np.zeros_like(q0), command, list(model.effects), steps=(steps - 1) * sub)
+    closed = ClosedLoopCommand("cartesian_position", switch, cmds)  # every arm switches at step 0
+    out = sim.rollout(q0, np.zeros_like(q0), bind(closed, q0[:, None]), list(model.effects), steps=(steps - 1) * sub)
     return [out[i, : e.steps * sub : sub] for i, e in enumerate(episodes)]
 
 
@@ -239,12 +230,9 @@ def rebuilt_joint_targets(ep: DroidEpisode, ik=None) -> np.ndarray:
     """(T, 7) the joint targets DROID streamed, rebuilt from the *measured* state: each step's
     ``cartesian_position`` command through DROID's conversion at ``q[t]`` (up to its IK's
     null-space choice), clipped to the joint limits."""
-    from realm_ms.agents.droid_action_spaces import Q_LIMITS, DroidIK, make_action_space
+    from realm_ms.sysid.droid_formats import rebuild_targets
 
-    space = make_action_space("cartesian_position", "position")
-    a = np.concatenate([ep.cartesian_cmd, np.zeros((ep.steps, 1))], 1)
-    t = space.to_joint_target(a, ep.q, np.zeros(ep.steps), ik or DroidIK())[:, :7]
-    return np.clip(t, Q_LIMITS[:, 0], Q_LIMITS[:, 1])
+    return rebuild_targets("cartesian_position", ep.cartesian_cmd, ep.q, None, ik=ik)
 
 
 def write_workbench_npz(episodes: list[DroidEpisode], out_dir: str | Path) -> list[Path]:

@@ -305,7 +305,7 @@ def align(data, model=None, out: str | Path = "align.html", command: str | None 
                 raise DataError(f"{index}: expected a JSON list of {{file, lab}} entries") from None
             break
     m = _model(model) if model is not None else None
-    name = "nominal" if model is None else str(model)
+    name = "nominal" if model is None else Path(str(model)).name
     return build_align_report(trajs, labs, m, name, Path(out), str(data), skipped, waterfall, log)
 
 

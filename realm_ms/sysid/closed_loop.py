@@ -105,7 +105,8 @@ class ClosedLoopCommand:
 def bind(closed: ClosedLoopCommand | None, cmd: np.ndarray):
     """What a rollout tracks: ``cmd`` (E, S, 7) itself, or with ``closed`` a function
     ``(k, q) -> (E, 7)`` (the rollouts' closed-loop form) giving ``cmd``'s target until an arm's
-    first command switch and the closed-loop target from then on."""
+    first command switch and the closed-loop target from then on (a shorter ``cmd`` holds its last
+    target: (E, 1, 7) for arms that all switch at step 0)."""
     if closed is None:
         return cmd
     active = np.zeros(cmd.shape[0], bool)
@@ -116,7 +117,7 @@ def bind(closed: ClosedLoopCommand | None, cmd: np.ndarray):
         if hit is not None:
             active[hit[0]] = True
             over[hit[0]] = hit[1]
-        return np.where(active[:, None], over, cmd[:, k])
+        return np.where(active[:, None], over, cmd[:, min(k, cmd.shape[1] - 1)])
 
     return target
 

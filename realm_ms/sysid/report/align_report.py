@@ -132,6 +132,10 @@ def _labs(runs) -> tuple[str, str]:
     return "Per lab", table(header, body)
 
 
+def _joints(mrad: list[float]) -> str:
+    return "<span style='white-space:nowrap'>" + " ".join(f"{x:.0f}" for x in mrad) + "</span>"
+
+
 def _episodes(runs, masked) -> tuple[str, str]:
     first, last = runs[0], runs[-1]
     header = ["episode", "lab", "steps", "masked", "lag real", "b real", f"{first.label} mm", "free mm", "lag", "b",
@@ -143,12 +147,11 @@ def _episodes(runs, masked) -> tuple[str, str]:
     for i in order:
         a = first.rows[i]
         row = [a.name, a.lab, a.steps, f"{masked[i]:.0%}", a.lag_real, f"{a.b_real:.2f}", f"{a.flange_mm:.1f}",
-               f"{first.free_mm[i]:.1f}", a.lag_sim, f"{a.b_sim:.2f}", " ".join(f"{x:.0f}" for x in a.joint_mrad)]
+               f"{first.free_mm[i]:.1f}", a.lag_sim, f"{a.b_sim:.2f}", _joints(a.joint_mrad)]
         c = [""] * len(row)
         if last is not first:
             z = last.rows[i]
-            row += [f"{z.flange_mm:.1f}", f"{last.free_mm[i]:.1f}", z.lag_sim, f"{z.b_sim:.2f}",
-                    " ".join(f"{x:.0f}" for x in z.joint_mrad)]
+            row += [f"{z.flange_mm:.1f}", f"{last.free_mm[i]:.1f}", z.lag_sim, f"{z.b_sim:.2f}", _joints(z.joint_mrad)]
             c += ["good" if z.flange_mm < a.flange_mm else "bad", "", "", "", ""]
         body.append(row)
         cls.append(c)
