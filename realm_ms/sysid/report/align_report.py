@@ -133,15 +133,17 @@ def _labs(runs) -> tuple[str, str]:
 
 
 def _joints(mrad: list[float]) -> str:
-    return "<span style='white-space:nowrap'>" + " ".join(f"{x:.0f}" for x in mrad) + "</span>"
+    """Per-joint error in mrad as 'median over joints / worst (its joint)'; the JSON has all seven."""
+    k = int(np.argmax(mrad))
+    return f"<span style='white-space:nowrap'>{np.median(mrad):.0f} / {mrad[k]:.0f} J{k + 1}</span>"
 
 
 def _episodes(runs, masked) -> tuple[str, str]:
     first, last = runs[0], runs[-1]
     header = ["episode", "lab", "steps", "masked", "lag real", "b real", f"{first.label} mm", "free mm", "lag", "b",
-              "mrad J1..J7"]
+              "mrad med / worst"]
     if last is not first:
-        header += [f"{last.label} mm", "free mm", "lag", "b", "mrad J1..J7"]
+        header += [f"{last.label} mm", "free mm", "lag", "b", "mrad med / worst"]
     body, cls = [], []
     order = np.argsort([-r.flange_mm for r in first.rows])
     for i in order:
