@@ -464,7 +464,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s = sub.add_parser("align", help="alignment report of DROID episodes: closed-loop replay, flange error, lag and "
                                      "response per episode and lab, before and after a robot model (HTML)")
     s.add_argument("data", metavar="DATA", help="DROID episodes: a directory of .npz/.json/.csv dumps or "
-                   "*/trajectory.h5, or a LeRobot dataset (index.json with file -> lab names the labs)")
+                   "trajectory.h5 files in DROID's DATE/EPISODE/ folders, or a LeRobot dataset (index.json with file -> lab names the labs)")
     s.add_argument("--out", required=True, metavar="FILE.html", help="HTML file to write (not a directory)")
     s.add_argument("--model", metavar="MODEL.yaml", help="robot model to compare with the nominal robot")
     s.add_argument("--command", metavar="MODE[:SPACE]", default=None,

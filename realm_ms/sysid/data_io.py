@@ -237,13 +237,13 @@ def read_npz_any(path: Path) -> Trajectory | None:
 
 def _files(root: Path) -> list[Path]:
     files = [f for f in sorted(root.iterdir()) if f.is_file() and f.suffix.lower() in DUMP_SUFFIXES]
-    return files or sorted(root.glob("*/trajectory.h5")) + sorted(root.glob("*/*/*/trajectory.h5"))
+    return files or sorted(root.rglob("trajectory.h5"))  # DROID's raw tree: [success/]DATE/EPISODE/trajectory.h5
 
 
 def load_dir(path: str | Path, limits: np.ndarray | None = None, options=None) -> list[Trajectory]:
     """All trajectories in DATA, validated: a directory of trajectory files (npz / json / csv / h5, see
     ``droid_formats``), one such file, a LeRobot v3.0 dataset, or DROID's raw episode folders
-    (``*/trajectory.h5``). ``options``: ``droid_formats.ReadOptions`` (the command mode)."""
+    (``trajectory.h5`` at any depth: ``[success/]DATE/EPISODE/``). ``options``: ``droid_formats.ReadOptions`` (the command mode)."""
     root = Path(path)
     if not root.exists():
         raise DataError(f"{root}: no such file or directory")
@@ -262,7 +262,7 @@ def load_dir(path: str | Path, limits: np.ndarray | None = None, options=None) -
             return load_dir(root / "train", limits, options) + load_dir(root / "heldout", limits, options)
         if not files:
             sub = [d.name for d in root.iterdir() if d.is_dir()]
-            raise DataError(f"{root}: no .npz, .json, .csv or */trajectory.h5 trajectories and no LeRobot dataset "
+            raise DataError(f"{root}: no .npz, .json, .csv or trajectory.h5 trajectories and no LeRobot dataset "
                             "(meta/info.json) here" + (f"; subdirectories: {sub}" if sub else ""))
         raw = [read_trajectory_file(f, options) for f in files]
     return [validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}") for tr in raw]
@@ -281,7 +281,7 @@ def load_each(path: str | Path, options=None) -> tuple[list[Trajectory], list[st
     else:
         files = [root] if root.is_file() else _files(root)
         if not files:
-            raise DataError(f"{root}: no .npz, .json, .csv or */trajectory.h5 trajectories and no LeRobot dataset "
+            raise DataError(f"{root}: no .npz, .json, .csv or trajectory.h5 trajectories and no LeRobot dataset "
                             "(meta/info.json) here")
         raw, skipped = [], []
         for f in files:
