@@ -114,7 +114,8 @@ def excite(out: str | Path, n: int = 10, seed: int = 0, **config) -> list[Path]:
 
 
 def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, rate_hz: float = 15.0,
-          workers: int | None = 1, **config) -> dict:
+          workers: int | None = 1, dry_run: bool = False, **config) -> dict:
+    """``dry_run``: only the argument checks (``synth_droid`` shares them)."""
     check_int(seed, "seed (--seed)", minimum=0)
     check_non_negative(noise_rad, "noise_rad (--noise)", "rad")
     rate = check_positive(rate_hz, "rate_hz (--rate)", "Hz")
@@ -129,9 +130,27 @@ def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, 
         raise InputError(f"duration_s (--duration): {duration:g} s is too short; every trajectory needs >= "
                          f"{MIN_SYNTH_DURATION_S:g} s (1 s burn-in + scored time) and >= {MIN_SAMPLES} samples "
                          f"(at {rate:g} Hz: >= {max(MIN_SYNTH_DURATION_S, (MIN_SAMPLES - 1) / rate):.3g} s)")
+    if dry_run:
+        return {}
     from realm_ms.sysid.synth import SynthConfig, synth as _synth  # after the checks: fail fast
 
     return _synth(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config))
+
+
+def synth_droid(hidden: str, out: str | Path, action_space: str = "cartesian_position", formats=("npz",),
+                log_joint_target: bool = False, seed: int = 0, noise_rad: float = 2e-4, rate_hz: float = 15.0,
+                workers: int | None = 1, **config) -> dict:
+    """DROID-format episodes with hidden effects (``synth.synth_droid``): same checks as ``synth``."""
+    control = config.get("control_hz", 15.0)
+    if rate_hz != control:
+        raise InputError(f"rate_hz (--rate): DROID logs one sample per command; use --rate = --control-hz ({control:g} Hz)")
+    if config.get("engine", "physx") not in ("physx", "mujoco"):
+        raise InputError("engine (--engine): DROID-format data comes from the physx or mujoco engine")
+    synth("none", out, seed, noise_rad, rate_hz, workers, dry_run=True, **config)  # the shared argument checks
+    from realm_ms.sysid.synth import SynthConfig, synth_droid as _synth_droid
+
+    return _synth_droid(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config), action_space,
+                        tuple(formats), log_joint_target)
 
 
 def compare(data, model=None, heldout=None, workers=None, device=None, segment_s: float = 8.0,

@@ -148,11 +148,16 @@ def _synth(args) -> int:
     _check_outputs(args, dirs=("--out",))
     with _user_input("--hidden: "):
         parse_effects(args.hidden, default_values="nominal")
+    common = dict(seed=args.seed, noise_rad=args.noise, rate_hz=args.rate, n_train=args.n_train,
+                  n_heldout=args.n_heldout, duration_s=args.duration, control_hz=args.control_hz, engine=args.engine)
     with _user_input():
-        info = api.synth(args.hidden, args.out, seed=args.seed, noise_rad=args.noise, rate_hz=args.rate,
-                         n_train=args.n_train, n_heldout=args.n_heldout, duration_s=args.duration,
-                         control_hz=args.control_hz, engine=args.engine)
-    print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {args.out} "
+        if args.droid_space:
+            info = api.synth_droid(args.hidden, args.out, args.droid_space, args.format or ["npz"],
+                                   log_joint_target=args.log_joint_target, **common)
+        else:
+            info = api.synth(args.hidden, args.out, **common)
+    where = f"{args.out}/<format>/" if args.droid_space else f"{args.out}"
+    print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {where} "
           f"(hidden: {info['hidden']}; truth in truth.yaml)")
     return 0
 
@@ -411,6 +416,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="mujoco-native: write t, q, qd, tau without q_cmd (a torque log; default rate 1 kHz)")
     s.add_argument("--noise-torque", type=non_negative("N·m"), default=0.02,
                    help="mujoco-native: torque-sensor noise std in N·m, >= 0 (default 0.02)")
+    s.add_argument("--droid-space", choices=("joint_position", "joint_velocity", "cartesian_position", "cartesian_velocity"),
+                   default=None, help="DROID-format episodes commanded in this action space, closed loop through "
+                   "DROID's conversion (physx/mujoco engines; 15 Hz, one sample per command)")
+    s.add_argument("--format", nargs="+", choices=("npz", "json", "csv", "h5", "lerobot"), default=None,
+                   help="with --droid-space: the formats to write, each under OUT/<format>/ (default npz)")
+    s.add_argument("--log-joint-target", action="store_true",
+                   help="with --droid-space: also log the joint target DROID sent (as its own logs do)")
     s.set_defaults(func=_synth)
 
     s = sub.add_parser("compare", help="replay DATA in simulation: per-joint error and noise floor")
