@@ -133,18 +133,22 @@ def test_bad_droid_logs_get_one_clear_message(tmp_path):
         ReadOptions.parse("rebuild:pose")
 
 
-def test_installed_command_reads_droid_dumps(tmp_path, ev):
-    """The path a user types: `realm sysid compare` on DROID json dumps; a bad --command is one line, exit 2."""
-    synth_droid("none", tmp_path, SynthConfig(noise_rad=2e-4, n_train=2, n_heldout=1, duration_s=3.0), "joint_velocity",
-                ("json",), evaluator=ev)
+def test_installed_command_reads_droid_dumps(tmp_path):
+    """The path a user types: `realm sysid synth --droid-space` writes json dumps, `realm sysid
+    compare` reads them with two workers; a bad --command or --rate is one line and exit 2."""
     realm = str(Path(sys.executable).parent / "realm")
-    ok = subprocess.run([realm, "sysid", "compare", str(tmp_path / "json"), "--workers", "2", "--device", "cpu"],
-                        capture_output=True, text=True, timeout=600)
+    run = lambda *a: subprocess.run([realm, "sysid", *a], capture_output=True, text=True, timeout=600)  # noqa: E731
+    made = run("synth", "--hidden", "none", "--droid-space", "joint_velocity", "--format", "json", "--n-train", "2",
+               "--n-heldout", "1", "--duration", "3", "--out", str(tmp_path / "d"))
+    assert made.returncode == 0, made.stderr
+    ok = run("compare", str(tmp_path / "d" / "json"), "--workers", "2", "--device", "cpu")
     assert ok.returncode == 0, ok.stderr
     assert "replay of 3 trajectories" in ok.stdout
-    bad = subprocess.run([realm, "sysid", "compare", str(tmp_path / "json"), "--command", "bogus"],
-                         capture_output=True, text=True, timeout=600)
-    assert bad.returncode == 2 and "unknown mode 'bogus'" in bad.stderr and "Traceback" not in bad.stderr
+    for bad, msg in ((("compare", str(tmp_path / "d" / "json"), "--command", "bogus"), "unknown mode 'bogus'"),
+                     (("synth", "--hidden", "none", "--droid-space", "joint_velocity", "--rate", "30", "--out",
+                       str(tmp_path / "e")), "one sample per command")):
+        r = run(*bad)
+        assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr
 
 
 def test_workbench_names_and_fits_a_hidden_delay_and_softer_gains(tmp_path):
