@@ -235,9 +235,21 @@ def read_npz_any(path: Path) -> Trajectory | None:
     return None if droid else read_npz(path)
 
 
+#: metadata that sits beside trajectories (synth's record, an episode index), never a trajectory
+SIDE_FILES = ("synth.json", "index.json")
+
+
 def _files(root: Path) -> list[Path]:
-    files = [f for f in sorted(root.iterdir()) if f.is_file() and f.suffix.lower() in DUMP_SUFFIXES]
-    return files or sorted(root.rglob("trajectory.h5"))  # DROID's raw tree: [success/]DATE/EPISODE/trajectory.h5
+    """The trajectory files of a directory: one format, the first of ``DUMP_SUFFIXES`` present
+    (a directory of npz trajectories may hold a JSON index beside them), else DROID's raw tree
+    ``[success/]DATE/EPISODE/trajectory.h5``."""
+    files = [f for f in sorted(root.iterdir()) if f.is_file() and f.suffix.lower() in DUMP_SUFFIXES
+             and f.name not in SIDE_FILES and ".tmp." not in f.name]
+    for suffix in DUMP_SUFFIXES:
+        same = [f for f in files if f.suffix.lower() == suffix]
+        if same:
+            return same
+    return sorted(root.rglob("trajectory.h5"))
 
 
 def load_dir(path: str | Path, limits: np.ndarray | None = None, options=None) -> list[Trajectory]:
@@ -251,18 +263,18 @@ def load_dir(path: str | Path, limits: np.ndarray | None = None, options=None) -
     if root.is_file() and root.suffix.lower() in DUMP_SUFFIXES:
         raw = [read_trajectory_file(root, options)]
     elif root.is_file():
-        raise DataError(f"{root}: expected a directory of trajectories (.npz, .json, .csv, trajectory.h5), one such "
-                        "file or a LeRobot v3.0 dataset directory")
+        raise DataError(f"{root}: expected a directory of .npz files (or .json, .csv, trajectory.h5 DROID logs), one "
+                        "such file or a LeRobot v3.0 dataset directory")
     elif (root / "meta" / "info.json").exists():
         raw = read_lerobot(root, options)
     else:
-        files = _files(root)
-        if not files and (root / "train").is_dir() and (root / "heldout").is_dir():
+        if (root / "train").is_dir() and (root / "heldout").is_dir() and not any(root.glob("*.npz")):
             # the layout `synth` writes: all of it (commands that split use load_split)
             return load_dir(root / "train", limits, options) + load_dir(root / "heldout", limits, options)
+        files = _files(root)
         if not files:
             sub = [d.name for d in root.iterdir() if d.is_dir()]
-            raise DataError(f"{root}: no .npz, .json, .csv or trajectory.h5 trajectories and no LeRobot dataset "
+            raise DataError(f"{root}: no .npz trajectories (nor .json, .csv, trajectory.h5) and no LeRobot dataset "
                             "(meta/info.json) here" + (f"; subdirectories: {sub}" if sub else ""))
         raw = [read_trajectory_file(f, options) for f in files]
     return [validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}") for tr in raw]
@@ -281,7 +293,7 @@ def load_each(path: str | Path, options=None) -> tuple[list[Trajectory], list[st
     else:
         files = [root] if root.is_file() else _files(root)
         if not files:
-            raise DataError(f"{root}: no .npz, .json, .csv or trajectory.h5 trajectories and no LeRobot dataset "
+            raise DataError(f"{root}: no .npz trajectories (nor .json, .csv, trajectory.h5) and no LeRobot dataset "
                             "(meta/info.json) here")
         raw, skipped = [], []
         for f in files:
