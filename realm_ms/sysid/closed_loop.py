@@ -135,6 +135,12 @@ def from_segments(trajs, segments, dt: float) -> ClosedLoopCommand | None:
         raise DataError("closed-loop replay needs every trajectory's command in one action space; got "
                         + (f"{sorted(spaces)}" if len(spaces) > 1 else f"none in {missing[0]}")
                         + ": pick one with --command closed_loop:SPACE")
+    cut = [tr.name for tr in trajs if len(tr.meta["droid_command"]["actions"]) != len(tr.t)]
+    if cut:
+        from realm_ms.sysid.timeseries import DataError
+
+        raise DataError(f"{cut[0]}: a single log cut into time blocks cannot be replayed closed loop; pass --heldout DIR "
+                        "(another log) or use --command rebuild")
     space = spaces.pop()
     k = max(s.stop - s.start for s in segments)
     d = trajs[0].meta["droid_command"]["actions"].shape[1]

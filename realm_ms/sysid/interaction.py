@@ -7,9 +7,9 @@ model. Two signatures, found from the 15 Hz log alone (no torque, no velocity in
 
 - **grasp**: the gripper is closed but stopped short of closed-on-nothing (an object between the
   fingers): measured gripper position in [``GRASP_MIN``, ``GRASP_MAX``] and still
-  (|Δg| < ``GRASP_STILL`` per step) for at least ``MIN_STEPS`` steps;
+  (|Δg| < ``GRASP_STILL`` per step) for at least ``MIN_S``;
 - **stall**: the commanded flange target is far from the flange (> ``STALL_GAP_M``) while the
-  flange hardly moves (< ``STALL_SPEED_M_S``) for at least ``MIN_STEPS`` steps: pushing against
+  flange hardly moves (< ``STALL_SPEED_M_S``) for at least ``MIN_S``: pushing against
   something (an arm in free space closes such a gap in a few steps).
 
 Flagged samples, widened by ``PAD_S`` on both sides, still drive the simulation; only their residual
@@ -31,7 +31,7 @@ GRASP_MAX = 0.95  # below it they stopped on something
 GRASP_STILL = 0.01  # per step
 STALL_GAP_M = 0.04
 STALL_SPEED_M_S = 0.01
-MIN_STEPS = 5
+MIN_S = 0.3  # s a signature must hold (5 steps at DROID's 15 Hz)
 PAD_S = 0.2
 
 
@@ -78,11 +78,12 @@ def _pad(flag: np.ndarray, t: np.ndarray, pad_s: float) -> np.ndarray:
 def detect(tr: Trajectory, ik=None) -> Interaction:
     """Grasp and stall samples of one trajectory (both widened by ``PAD_S``)."""
     n = len(tr.t)
+    min_len = max(2, int(np.ceil(MIN_S * tr.rate_hz - 1e-9)))
     grasp = np.zeros(n, bool)
     if tr.gripper is not None:
         g = tr.gripper
         still = np.r_[True, np.abs(np.diff(g)) < GRASP_STILL]
-        grasp = _runs((g > GRASP_MIN) & (g < GRASP_MAX) & still, MIN_STEPS)
+        grasp = _runs((g > GRASP_MIN) & (g < GRASP_MAX) & still, min_len)
     stall = np.zeros(n, bool)
     if tr.q_cmd is not None:
         from realm_ms.agents.droid_action_spaces import DroidIK
@@ -91,7 +92,7 @@ def detect(tr: Trajectory, ik=None) -> Interaction:
         p = ik.flange(tr.q)[:, :3, 3]
         gap = np.linalg.norm(ik.flange(tr.q_cmd)[:, :3, 3] - p, axis=1)
         speed = np.linalg.norm(np.gradient(p, tr.t, axis=0), axis=1)
-        stall = _runs((gap > STALL_GAP_M) & (speed < STALL_SPEED_M_S), MIN_STEPS)
+        stall = _runs((gap > STALL_GAP_M) & (speed < STALL_SPEED_M_S), min_len)
     return Interaction(_pad(grasp, tr.t, PAD_S), _pad(stall, tr.t, PAD_S))
 
 
