@@ -29,7 +29,7 @@ def test_effects_lists_the_library(capsys):
     lib = json.loads(out)
     assert code == 0 and [e["name"] for e in lib] == list(EFFECTS)
     lat = next(e for e in lib if e["name"] == "latency")
-    assert lat["params"][0]["unit"] == "s" and lat["params"][0]["bounds"] == [0.0, 0.1]
+    assert lat["params"][0]["unit"] == "s" and lat["params"][0]["bounds"] == [0.0, 0.3]
 
 
 def test_excite_writes_command_trajectories(tmp_path, capsys):

@@ -23,12 +23,20 @@ from realm_ms.validate import InputError, check_device, check_int, check_non_neg
 MIN_SYNTH_DURATION_S = 2.0
 
 
-def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3) -> tuple[list[Trajectory], list[Trajectory]]:
+def _read_options(command: str | None):
+    """``--command MODE[:SPACE]``: how a DROID log's command becomes joint targets (``droid_formats.py``)."""
+    from realm_ms.sysid.droid_formats import ReadOptions
+
+    return ReadOptions.parse(command)
+
+
+def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3,
+           command: str | None = None) -> tuple[list[Trajectory], list[Trajectory]]:
     if isinstance(data, tuple):
         return data
     from realm_ms.sysid.data_io import load_split
 
-    return load_split(data, heldout, seed, heldout_fraction)
+    return load_split(data, heldout, seed, heldout_fraction, _read_options(command))
 
 
 def _space(trajs: list[Trajectory], space: str | None) -> str:
@@ -108,7 +116,8 @@ def excite(out: str | Path, n: int = 10, seed: int = 0, **config) -> list[Path]:
 
 
 def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, rate_hz: float = 15.0,
-          workers: int | None = 1, **config) -> dict:
+          workers: int | None = 1, dry_run: bool = False, **config) -> dict:
+    """``dry_run``: only the argument checks (``synth_droid`` shares them)."""
     check_int(seed, "seed (--seed)", minimum=0)
     check_non_negative(noise_rad, "noise_rad (--noise)", "rad")
     rate = check_positive(rate_hz, "rate_hz (--rate)", "Hz")
@@ -123,22 +132,41 @@ def synth(hidden: str, out: str | Path, seed: int = 0, noise_rad: float = 2e-4, 
         raise InputError(f"duration_s (--duration): {duration:g} s is too short; every trajectory needs >= "
                          f"{MIN_SYNTH_DURATION_S:g} s (1 s burn-in + scored time) and >= {MIN_SAMPLES} samples "
                          f"(at {rate:g} Hz: >= {max(MIN_SYNTH_DURATION_S, (MIN_SAMPLES - 1) / rate):.3g} s)")
+    if dry_run:
+        return {}
     from realm_ms.sysid.synth import SynthConfig, synth as _synth  # after the checks: fail fast
 
     return _synth(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config))
 
 
+def synth_droid(hidden: str, out: str | Path, action_space: str = "cartesian_position", formats=("npz",),
+                log_joint_target: bool = False, seed: int = 0, noise_rad: float = 2e-4, rate_hz: float = 15.0,
+                workers: int | None = 1, **config) -> dict:
+    """DROID-format episodes with hidden effects (``synth.synth_droid``): same checks as ``synth``."""
+    control = config.get("control_hz", 15.0)
+    if rate_hz != control:
+        raise InputError(f"rate_hz (--rate): DROID logs one sample per command; use --rate = --control-hz ({control:g} Hz)")
+    if config.get("engine", "physx") not in ("physx", "mujoco"):
+        raise InputError("engine (--engine): DROID-format data comes from the physx or mujoco engine")
+    synth("none", out, seed, noise_rad, rate_hz, workers, dry_run=True, **config)  # the shared argument checks
+    from realm_ms.sysid.synth import SynthConfig, synth_droid as _synth_droid
+
+    return _synth_droid(hidden, out, SynthConfig(seed=seed, noise_rad=noise_rad, rate_hz=rate_hz, **config), action_space,
+                        tuple(formats), log_joint_target)
+
+
 def compare(data, model=None, heldout=None, workers=None, device=None, segment_s: float = 8.0,
-            space: str | None = None) -> dict:
+            space: str | None = None, command: str | None = None) -> dict:
     """Replay DATA (all trajectories; plus ``heldout`` if given) with the model."""
     from realm_ms.sysid.data_io import load_dir
     from realm_ms.sysid.fit import compare as _compare
 
     check_positive(segment_s, "segment_s (--segment)", "s")
     m = _model(model)
-    trajs = data if isinstance(data, list) else load_dir(data)
+    opts = _read_options(command)
+    trajs = data if isinstance(data, list) else load_dir(data, options=opts)
     if heldout is not None:
-        trajs = trajs + load_dir(heldout)
+        trajs = trajs + load_dir(heldout, options=opts)
     if _space(trajs, space) == "torque":
         from realm_ms.sysid.torque import verbs
 
@@ -149,10 +177,10 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
 
 
 def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print,
-             space: str | None = None, **config) -> dict:
+             space: str | None = None, command: str | None = None, **config) -> dict:
     from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose as _diagnose
 
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
@@ -168,7 +196,8 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
 
 
 def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None,
-        device=None, progress: bool = True, log=print, space: str | None = None, **config) -> dict:
+        device=None, progress: bool = True, log=print, space: str | None = None, command: str | None = None,
+        **config) -> dict:
     from datetime import datetime, timezone
 
     from realm_ms.sysid.fit import FitConfig, fit as _fit
@@ -184,7 +213,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(out, "out (--out)")  # before the fit, not after it
     if config.get("checkpoint"):
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
@@ -214,7 +243,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
 
 
 def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None, device=None,
-         progress: bool = True, log=print, space: str | None = None, **config) -> dict:
+         progress: bool = True, log=print, space: str | None = None, command: str | None = None, **config) -> dict:
     """diagnose -> fit the top suspect -> re-diagnose ... until the floor (``sysid/auto.py``)."""
     from datetime import datetime, timezone
 
@@ -226,7 +255,7 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
             check_int(config[key], f"{key} (--{key.replace('_', '-')})", minimum=1)
     if out is not None:
         check_output_file(out, "out (--out)")
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _checked_space(train + held, space) == "torque":
         from realm_ms.sysid.torque import verbs
@@ -249,12 +278,13 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
 
 
 def report(data, model=None, out: str | Path = "report.html", heldout=None, seed: int = 0, diagnosis=None,
-           fit_result=None, workers=None, device=None, waterfall: bool = True, log=print, auto_result=None) -> Path:
+           fit_result=None, workers=None, device=None, waterfall: bool = True, log=print, auto_result=None,
+           command: str | None = None) -> Path:
     from realm_ms.sysid.report import build_report
     from realm_ms.validate import check_output_file
 
     check_output_file(out, "out (--out)")
-    train, held = _split(data, heldout, seed)
+    train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
     if _checked_space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
         from realm_ms.sysid.report.torque_report import build_torque_report
@@ -266,6 +296,38 @@ def report(data, model=None, out: str | Path = "report.html", heldout=None, seed
     auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")
     return build_report(train, held, m, Path(out), _evaluator(m, workers, device), diagnosis=diagnosis,
                         fit_result=fit_result, waterfall=waterfall, data_name=str(data), log=log, auto=auto_result)
+
+
+def align(data, model=None, out: str | Path = "align.html", command: str | None = None, waterfall: bool = True,
+          log=print) -> dict:
+    """The alignment report of DROID episodes (any format ``load_dir`` reads): closed-loop replay
+    under the nominal robot, the model's waterfall and the model; per-lab and per-episode flange
+    error, lag, response; HTML at ``out`` (``report/align_report.py``). Episodes that fail to read
+    or validate are left out and listed. Labs come from ``index.json`` (``file`` -> ``lab``) in DATA
+    or its parent, else from the name's last ``_`` part."""
+    from realm_ms.sysid.data_io import load_each
+    from realm_ms.sysid.report.align_report import build_align_report
+    from realm_ms.validate import check_output_file
+
+    check_output_file(out, "out (--out)")
+    opts = _read_options(command or "closed_loop")
+    root = Path(data)
+    if root.is_dir() and (root / "episodes").is_dir() and not any(root.glob("*.npz")):
+        root = root / "episodes"
+    trajs, skipped = load_each(root, opts)
+    for s in skipped:
+        log(f"warning: left out: {s}")
+    labs = {}
+    for index in (root / "index.json", root.parent / "index.json"):
+        if index.is_file():
+            try:
+                labs = {Path(e["file"]).stem: str(e.get("lab", "?")) for e in json.loads(index.read_text())}
+            except (ValueError, KeyError, TypeError):
+                raise DataError(f"{index}: expected a JSON list of {{file, lab}} entries") from None
+            break
+    m = _model(model) if model is not None else None
+    name = "nominal" if model is None else Path(str(model)).name
+    return build_align_report(trajs, labs, m, name, Path(out), str(data), skipped, waterfall, log)
 
 
 def _load_json(obj, keys: tuple[str, ...], what: str):

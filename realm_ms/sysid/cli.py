@@ -1,4 +1,4 @@
-"""``realm sysid {effects,excite,synth,compare,diagnose,fit,auto,report}``.
+"""``realm sysid {effects,excite,synth,compare,diagnose,fit,auto,report,align}``.
 
 Registered by ``realm_ms/cli.py`` through ``add_parser(subparsers)``; heavy imports stay inside
 the handlers. Bad input raises ``realm_ms.cli.UserError`` (one clear message, no traceback).
@@ -148,11 +148,16 @@ def _synth(args) -> int:
     _check_outputs(args, dirs=("--out",))
     with _user_input("--hidden: "):
         parse_effects(args.hidden, default_values="nominal")
+    common = dict(seed=args.seed, noise_rad=args.noise, rate_hz=args.rate, n_train=args.n_train,
+                  n_heldout=args.n_heldout, duration_s=args.duration, control_hz=args.control_hz, engine=args.engine)
     with _user_input():
-        info = api.synth(args.hidden, args.out, seed=args.seed, noise_rad=args.noise, rate_hz=args.rate,
-                         n_train=args.n_train, n_heldout=args.n_heldout, duration_s=args.duration,
-                         control_hz=args.control_hz, engine=args.engine)
-    print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {args.out} "
+        if args.droid_space:
+            info = api.synth_droid(args.hidden, args.out, args.droid_space, args.format or ["npz"],
+                                   log_joint_target=args.log_joint_target, **common)
+        else:
+            info = api.synth(args.hidden, args.out, **common)
+    where = f"{args.out}/<format>/" if args.droid_space else f"{args.out}"
+    print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {where} "
           f"(hidden: {info['hidden']}; truth in truth.yaml)")
     return 0
 
@@ -179,7 +184,8 @@ def _compare(args) -> int:
     _check_outputs(args, files=("--json",))
     _check_model(args)
     with _user_input():
-        c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space)
+        c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space,
+                        command=args.command)
     names = [f"J{i}" for i in range(1, 8)]
     if c["unit"] == "N·m":
         print(f"torque space ({c['samples']} samples): inverse-dynamics residual RMSE {c['rmse_nm']:.3e} N·m, "
@@ -193,6 +199,11 @@ def _compare(args) -> int:
     print("joint      " + " ".join(f"{n:>9}" for n in names))
     print("RMSE [rad] " + " ".join(f"{v:9.2e}" for v in c["per_joint_rmse_rad"]))
     print("max  [rad] " + " ".join(f"{v:9.2e}" for v in c["per_joint_max_abs_error_rad"]))
+    if c.get("interaction_fraction"):
+        print(f"grasps and stalls against the scene (not modelled by an arm-only replay): {c['interaction_fraction']:.1%} "
+              "of the scored samples simulated but not scored; per trajectory: "
+              + ", ".join(f"{t['name']} {t['masked']['masked']:.0%}" for t in c["trajectories"] if t.get("masked")
+                          and t["masked"]["masked"] > 0))
     worst = sorted(c["trajectories"], key=lambda t: -(t["rmse_rad"] or 0))[:3]
     print("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
     _write_json(args.json, c)
@@ -215,7 +226,7 @@ def _diagnose(args) -> int:
     _check_model(args)
     with _user_input():
         d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
-                         log=lambda m: print(m, file=sys.stderr), space=args.space, **kw)
+                         log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw)
     b = d["baseline"]
     u, sfx = ("N·m", "nm") if d.get("unit") == "N·m" else ("rad", "rad")
     print(f"baseline held-out RMSE {b[f'heldout_rmse_{sfx}']:.3e} {u}, noise floor ≈ {b[f'noise_floor_{sfx}']:.2e} {u}")
@@ -242,7 +253,8 @@ def _fit(args) -> int:
         f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                     generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
-                    noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space)
+                    noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space,
+                    command=args.command)
     print(f"fitted {', '.join(f['effects'])} -> {args.out}")
     torque = f.get("unit") == "N·m"  # torque space reports N·m (and its params carry no unit table)
     unit, key, fmt, train_fmt = ("N·m", "nm", "9.3f", ".3f") if torque else ("rad", "rad", "9.2e", ".2e")
@@ -279,7 +291,8 @@ def _auto(args) -> int:
     with _user_input():
         a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                      progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
-                     generations=args.generations, max_steps=args.max_steps, space=args.space)
+                     generations=args.generations, max_steps=args.max_steps, space=args.space,
+                     command=args.command)
     f = a["final"]
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")
@@ -302,8 +315,31 @@ def _report(args) -> int:
     with _user_input():
         p = api.report(args.data, args.model, args.out, args.heldout, args.seed, args.diagnosis, args.fit,
                        args.workers, args.device, waterfall=not args.no_waterfall, log=lambda m: print(m, file=sys.stderr),
-                       auto_result=args.auto)
+                       auto_result=args.auto, command=args.command)
     print(f"wrote {p}")
+    return 0
+
+
+def _align(args) -> int:
+    import numpy as np
+
+    from realm_ms.sysid import api
+
+    _check_data(args.data)
+    _check_outputs(args, files=("--out", "--json"))
+    _check_model(args)
+    with _user_input():
+        a = api.align(args.data, args.model, args.out, args.command, waterfall=not args.no_waterfall,
+                      log=lambda m: print(m, file=sys.stderr))
+    print(f"{'robot':<40} {'flange mm':>9} {'free mm':>8} {'lag sim':>7} {'b sim':>6}   (real: lag "
+          f"{a['runs'][0]['overall']['lag_real']:.1f}, b {a['runs'][0]['overall']['b_real']:.2f})")
+    for r in a["runs"]:
+        o = r["overall"]
+        print(f"{r['label'][:40]:<40} {o['flange_mm']:>9.1f} {r['free_flange_mm']:>8.1f} {o['lag_sim']:>7.1f} {o['b_sim']:>6.2f}")
+    masked = [e["masked"] for e in a["runs"][0]["episodes"]]
+    print(f"grasps/stalls masked: {np.mean(masked):.0%} of steps on average; {len(a['skipped'])} episode(s) left out")
+    _write_json(args.json, a)
+    print(f"wrote {args.out}")
     return 0
 
 
@@ -321,6 +357,11 @@ def _common(p: argparse.ArgumentParser, heldout: bool = True) -> None:
                    help="CPU worker processes, integer >= 1 (default: $REALM_SYSID_WORKERS or min(2, cores))")
     p.add_argument("--device", choices=["cpu", "cuda"], default=None,
                    help="simulation device (default: cuda if a GPU is available, else cpu)")
+    p.add_argument("--command", metavar="MODE[:SPACE]", default=None,
+                   help="how a DROID log's command becomes joint targets: logged (its joint target), rebuild "
+                        "(converted at the measured state), closed_loop (converted at the simulated state inside "
+                        "the replay), auto (default: logged if there, else rebuild); SPACE picks the logged "
+                        "action space (e.g. rebuild:cartesian_position)")
 
 
 def _space_arg(p: argparse.ArgumentParser) -> None:
@@ -375,6 +416,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="mujoco-native: write t, q, qd, tau without q_cmd (a torque log; default rate 1 kHz)")
     s.add_argument("--noise-torque", type=non_negative("N·m"), default=0.02,
                    help="mujoco-native: torque-sensor noise std in N·m, >= 0 (default 0.02)")
+    s.add_argument("--droid-space", choices=("joint_position", "joint_velocity", "cartesian_position", "cartesian_velocity"),
+                   default=None, help="DROID-format episodes commanded in this action space, closed loop through "
+                   "DROID's conversion (physx/mujoco engines; 15 Hz, one sample per command)")
+    s.add_argument("--format", nargs="+", choices=("npz", "json", "csv", "h5", "lerobot"), default=None,
+                   help="with --droid-space: the formats to write, each under OUT/<format>/ (default npz)")
+    s.add_argument("--log-joint-target", action="store_true",
+                   help="with --droid-space: also log the joint target DROID sent (as its own logs do)")
     s.set_defaults(func=_synth)
 
     s = sub.add_parser("compare", help="replay DATA in simulation: per-joint error and noise floor")
@@ -424,6 +472,18 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--no-waterfall", action="store_true", help="skip the effect-by-effect held-out waterfall")
     s.add_argument("--auto", metavar="FILE", help="auto --json output to include (its waterfall)")
     s.set_defaults(func=_report)
+
+    s = sub.add_parser("align", help="alignment report of DROID episodes: closed-loop replay, flange error, lag and "
+                                     "response per episode and lab, before and after a robot model (HTML)")
+    s.add_argument("data", metavar="DATA", help="DROID episodes: a directory of .npz/.json/.csv dumps or "
+                   "trajectory.h5 files in DROID's DATE/EPISODE/ folders, or a LeRobot dataset (index.json with file -> lab names the labs)")
+    s.add_argument("--out", required=True, metavar="FILE.html", help="HTML file to write (not a directory)")
+    s.add_argument("--model", metavar="MODEL.yaml", help="robot model to compare with the nominal robot")
+    s.add_argument("--command", metavar="MODE[:SPACE]", default=None,
+                   help="how commands become joint targets (default closed_loop; see `realm sysid compare --help`)")
+    s.add_argument("--no-waterfall", action="store_true", help="only nominal and the model, not its effects one at a time")
+    s.add_argument("--json", metavar="FILE", help="write the numbers as JSON")
+    s.set_defaults(func=_align)
 
     s = sub.add_parser("auto", help="diagnose, fit the top suspect, re-diagnose ... until the noise floor")
     s.add_argument("data", metavar="DATA", help="npz directory (or synth's train/+heldout/ layout) or LeRobot v3.0 dataset")

@@ -1,6 +1,8 @@
 """Reading and writing measured data.
 
-Two input formats (see ``docs/sysid.md``):
+Input formats (see ``docs/sysid.md``); DROID's own recordings (per-step dumps in any action space,
+raw ``trajectory.h5``, the LeRobot port's ``action.*`` features) are normalised by
+``droid_formats.py``:
 
 * **npz directory**: one ``.npz`` per trajectory with ``t`` (T,) s, ``q`` (T,7) rad, ``q_cmd`` (T,7) rad
   (held from ``t[i]`` until ``t[i+1]``), optional ``qd``, ``tau``, ``gripper``, ``gripper_cmd`` and
@@ -92,7 +94,7 @@ def _shape(feat) -> list:
 
 def _lerobot_feature(info: dict, words: tuple[str, ...]) -> str | None:
     for name, feat in info.get("features", {}).items():
-        if (any(w in name for w in words) and isinstance(feat, dict) and feat.get("dtype") in ("float32", "float64")
+        if (any(w in name for w in words) and not name.startswith("action") and isinstance(feat, dict) and feat.get("dtype") in ("float32", "float64")
                 and _shape(feat)[:1] in ([7], [8])):
             return name
     return None
@@ -114,7 +116,11 @@ def _read_info(root: Path) -> dict:
     return info
 
 
-def read_lerobot(root: Path) -> list[Trajectory]:
+def read_lerobot(root: Path, options=None) -> list[Trajectory]:
+    """Every episode of a LeRobot v3.0 dataset; DROID's port's ``action.<space>`` features are read
+    too and the command chosen by ``options`` (``droid_formats.ReadOptions``)."""
+    from realm_ms.sysid.droid_formats import ARM_DIM, from_columns, to_trajectory
+
     info = _read_info(root)
     info_path = root / "meta" / "info.json"
     version = str(info.get("codebase_version", "?"))
@@ -123,7 +129,11 @@ def read_lerobot(root: Path) -> list[Trajectory]:
     feats = info["features"]
     # a torque log (an effort/torque feature, no joint-position `action`) is worked on in torque space
     torque_log = "action" not in feats and _lerobot_feature(info, ("effort", "torque")) is not None
-    for key in ("observation.state",) + (() if torque_log else ("action",)):
+    # DROID's LeRobot port logs the command in every action space: action.joint_position, ...
+    spaces = [f"action.{s}" for s in ARM_DIM if f"action.{s}" in feats]
+    grips = [f"action.gripper_{k}" for k in ("position", "velocity") if f"action.gripper_{k}" in feats]
+    need_action = not torque_log and not spaces
+    for key in ("observation.state",) + (("action",) if need_action else ()):
         if key not in feats:
             raise DataError(f"{root}: LeRobot dataset lacks `{key}`; DROID convention: observation.state = 7 joint positions + gripper, action = 7 joint targets + gripper")
         if _shape(feats[key])[:1] not in ([7], [8]) or len(_shape(feats[key])) != 1:
@@ -147,7 +157,7 @@ def read_lerobot(root: Path) -> list[Trajectory]:
         except Exception as e:  # noqa: BLE001 - pyarrow raises many types for damaged files
             raise DataError(f"{f}: not a readable parquet file ({type(e).__name__}); the file is damaged or truncated") from None
     df = pd.concat(frames, ignore_index=True)
-    for col in ("episode_index", "observation.state") + (() if torque_log else ("action",)):
+    for col in ("episode_index", "observation.state") + (("action",) if need_action else ()) + tuple(spaces):
         if col not in df.columns:
             raise DataError(f"{files[0].parent}: the parquet files have no `{col}` column (columns: {', '.join(map(str, df.columns))})")
     vel, eff = _lerobot_feature(info, ("velocit",)), _lerobot_feature(info, ("effort", "torque"))
@@ -156,16 +166,35 @@ def read_lerobot(root: Path) -> list[Trajectory]:
         g = g.sort_values("frame_index") if "frame_index" in g else g
         where = f"{root.name}/episode {ep}"
         state = _stack(g, "observation.state", where)
-        action = None if torque_log else _stack(g, "action", where)
         t = g["timestamp"].to_numpy(dtype=np.float64) if "timestamp" in g else np.arange(len(g)) / fps
-        trajs.append(Trajectory(
-            f"episode_{int(ep):06d}", t, state[:, :7], None if action is None else action[:, :7],
-            _stack(g, vel, where)[:, :7] if vel and vel in g else None,
-            _stack(g, eff, where)[:, :7] if eff and eff in g else None,
-            state[:, 7] if state.shape[1] > 7 else None,
-            action[:, 7] if action is not None and action.shape[1] > 7 else None, None if torque_log else fps,
-        ))
+        qd = _stack(g, vel, where)[:, :7] if vel and vel in g else None
+        tau = _stack(g, eff, where)[:, :7] if eff and eff in g else None
+        if torque_log:
+            trajs.append(Trajectory(f"episode_{int(ep):06d}", t, state[:, :7], None, qd, tau,
+                                    state[:, 7] if state.shape[1] > 7 else None, None, None))
+            continue
+        cols = {"t": t, "q": state[:, :7], "control_hz": np.float64(fps)}
+        if state.shape[1] > 7:
+            cols["gripper"] = state[:, 7]
+        if "action" in g:  # a joint target (+ gripper): realm export and DROID's port alike
+            action = _stack(g, "action", where)
+            cols["q_cmd"] = action[:, :7]
+            if action.shape[1] > 7:
+                cols["gripper_cmd"] = action[:, 7]
+        for col in spaces + grips:
+            cols[col] = _vectors(g, col, where)
+        tr = to_trajectory(from_columns(cols, f"episode_{int(ep):06d}", where), options)
+        tr.qd, tr.tau = qd, tau
+        trajs.append(tr)
     return trajs
+
+
+def _vectors(g, col: str, where: str) -> np.ndarray:
+    try:
+        a = np.stack([np.atleast_1d(v) for v in g[col].to_numpy()]).astype(np.float64)
+    except (TypeError, ValueError):
+        raise DataError(f"{where}: column `{col}` does not hold equal-length numeric vectors") from None
+    return a[:, 0] if a.shape[1] == 1 else a
 
 
 def _stack(g, col: str, where: str) -> np.ndarray:
@@ -178,34 +207,118 @@ def _stack(g, col: str, where: str) -> np.ndarray:
     return a
 
 
-def load_dir(path: str | Path, limits: np.ndarray | None = None) -> list[Trajectory]:
-    """All trajectories in an npz directory or a LeRobot v3.0 dataset, validated."""
+#: per-step dump files a DATA directory may hold (besides the workbench's npz); DROID's raw
+#: recordings sit one episode per folder as ``<episode>/trajectory.h5``
+DUMP_SUFFIXES = (".npz", ".json", ".csv", ".h5", ".hdf5")
+
+
+def read_trajectory_file(path: Path, options=None) -> Trajectory:
+    """One file: the workbench's npz (``q_cmd`` or ``tau``) or a DROID per-step dump (any action space)."""
+    from realm_ms.sysid import droid_formats
+
+    if path.suffix == ".npz":
+        tr = read_npz_any(path)
+        if tr is not None:
+            return tr
+    return droid_formats.to_trajectory(droid_formats.read_file(path), options)
+
+
+def read_npz_any(path: Path) -> Trajectory | None:
+    """The workbench npz, or None when the archive logs a command in one of DROID's action spaces."""
+    from realm_ms.sysid.droid_formats import is_droid_columns
+
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            droid = is_droid_columns(z.files)
+    except Exception:  # noqa: BLE001 - read_npz names what is wrong with the file
+        droid = False
+    return None if droid else read_npz(path)
+
+
+#: metadata that sits beside trajectories (synth's record, an episode index), never a trajectory
+SIDE_FILES = ("synth.json", "index.json")
+
+
+def _files(root: Path) -> list[Path]:
+    """The trajectory files of a directory: one format, the first of ``DUMP_SUFFIXES`` present
+    (a directory of npz trajectories may hold a JSON index beside them), else DROID's raw tree
+    ``[success/]DATE/EPISODE/trajectory.h5``."""
+    files = [f for f in sorted(root.iterdir()) if f.is_file() and f.suffix.lower() in DUMP_SUFFIXES
+             and f.name not in SIDE_FILES and ".tmp." not in f.name]
+    for suffix in DUMP_SUFFIXES:
+        same = [f for f in files if f.suffix.lower() == suffix]
+        if same:
+            return same
+    return sorted(root.rglob("trajectory.h5"))
+
+
+def load_dir(path: str | Path, limits: np.ndarray | None = None, options=None) -> list[Trajectory]:
+    """All trajectories in DATA, validated: a directory of trajectory files (npz / json / csv / h5, see
+    ``droid_formats``), one such file, a LeRobot v3.0 dataset, or DROID's raw episode folders
+    (``trajectory.h5`` at any depth: ``[success/]DATE/EPISODE/``). ``options``: ``droid_formats.ReadOptions`` (the command mode)."""
     root = Path(path)
     if not root.exists():
         raise DataError(f"{root}: no such file or directory")
     limits = joint_limits() if limits is None else limits
-    if root.is_file() and root.suffix == ".npz":
-        raw = [read_npz(root)]
+    if root.is_file() and root.suffix.lower() in DUMP_SUFFIXES:
+        raw = [read_trajectory_file(root, options)]
     elif root.is_file():
-        raise DataError(f"{root}: expected a directory of .npz files, one .npz file or a LeRobot v3.0 dataset directory")
+        raise DataError(f"{root}: expected a directory of .npz files (or .json, .csv, trajectory.h5 DROID logs), one "
+                        "such file or a LeRobot v3.0 dataset directory")
     elif (root / "meta" / "info.json").exists():
-        raw = read_lerobot(root)
-    elif root.is_dir():
-        files = sorted(root.glob("*.npz"))
-        if not files and (root / "train").is_dir() and (root / "heldout").is_dir():
+        raw = read_lerobot(root, options)
+    else:
+        if (root / "train").is_dir() and (root / "heldout").is_dir() and not any(root.glob("*.npz")):
             # the layout `synth` writes: all of it (commands that split use load_split)
-            return load_dir(root / "train", limits) + load_dir(root / "heldout", limits)
+            return load_dir(root / "train", limits, options) + load_dir(root / "heldout", limits, options)
+        files = _files(root)
         if not files:
             sub = [d.name for d in root.iterdir() if d.is_dir()]
-            raise DataError(f"{root}: no .npz trajectories and no LeRobot dataset (meta/info.json) here" + (f"; subdirectories: {sub}" if sub else ""))
-        raw = [read_npz(f) for f in files]
-    else:
-        raise DataError(f"{root}: expected a directory of .npz files or a LeRobot v3.0 dataset")
+            raise DataError(f"{root}: no .npz trajectories (nor .json, .csv, trajectory.h5) and no LeRobot dataset "
+                            "(meta/info.json) here" + (f"; subdirectories: {sub}" if sub else ""))
+        raw = [read_trajectory_file(f, options) for f in files]
     return [validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}") for tr in raw]
 
 
+def load_each(path: str | Path, options=None) -> tuple[list[Trajectory], list[str]]:
+    """Like ``load_dir``, but an episode that fails to read or validate is set aside, not fatal:
+    (trajectories, one line per episode left out). For a set of real episodes where one bad log
+    should not hide the others (``realm sysid align``)."""
+    root = Path(path)
+    if not root.exists():
+        raise DataError(f"{root}: no such file or directory")
+    limits = joint_limits()
+    if root.is_dir() and (root / "meta" / "info.json").exists():
+        raw = read_lerobot(root, options)
+    else:
+        files = [root] if root.is_file() else _files(root)
+        if not files:
+            raise DataError(f"{root}: no .npz trajectories (nor .json, .csv, trajectory.h5) and no LeRobot dataset "
+                            "(meta/info.json) here")
+        raw, skipped = [], []
+        for f in files:
+            try:
+                raw.append(read_trajectory_file(f, options))
+            except DataError as e:
+                skipped.append(str(e))
+        return _validated(raw, limits, root, skipped)
+    return _validated(raw, limits, root, [])
+
+
+def _validated(raw: list[Trajectory], limits, root: Path, skipped: list[str]) -> tuple[list[Trajectory], list[str]]:
+    out = []
+    for tr in raw:
+        try:
+            out.append(validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}"))
+        except DataError as e:
+            skipped.append(str(e))
+    if not out:
+        raise DataError(f"{root}: no usable trajectory; " + ("; ".join(skipped[:3]) or "none found"))
+    return out, skipped
+
+
 def load_split(data: str | Path, heldout: str | Path | None = None, seed: int = 0,
-               heldout_fraction: float = 0.3) -> tuple[list[Trajectory], list[Trajectory]]:
+               heldout_fraction: float = 0.3, options=None) -> tuple[list[Trajectory], list[Trajectory]]:
     """(train, held-out): ``--heldout DIR`` if given, ``DATA/train`` + ``DATA/heldout`` if present,
     else a seeded split by trajectory of DATA."""
     from realm_ms.sysid.timeseries import split
@@ -213,7 +326,7 @@ def load_split(data: str | Path, heldout: str | Path | None = None, seed: int = 
     root = Path(data)
     limits = joint_limits()
     if heldout is not None:
-        return load_dir(root, limits), load_dir(heldout, limits)
+        return load_dir(root, limits, options), load_dir(heldout, limits, options)
     if (root / "train").is_dir() and (root / "heldout").is_dir():
-        return load_dir(root / "train", limits), load_dir(root / "heldout", limits)
-    return split(load_dir(root, limits), heldout_fraction, seed)
+        return load_dir(root / "train", limits, options), load_dir(root / "heldout", limits, options)
+    return split(load_dir(root, limits, options), heldout_fraction, seed)

@@ -94,12 +94,16 @@ class Diagnosis:
     verdict: str = "no_missing_effect"  # no_missing_effect | found | partially_explained | unexplained
     judging_floor: float = 0.0  # hypot(noise floor, replay floor): what "at the floor" is measured against
     saturated_fraction: float = 0.0  # held-out samples in torque-saturated bursts, not scored (``saturation.py``)
+    interaction_fraction: float = 0.0  # held-out samples in grasps/stalls, not scored (``interaction.py``)
+    masked: dict = field(default_factory=dict)  # trajectory name -> its grasp/stall/masked shares
 
     def to_json(self) -> dict:
         return {
             "baseline": {"heldout_rmse_rad": float(self.baseline_heldout_rmse), "noise_floor_rad": float(self.noise_floor),
                          "judging_floor_rad": float(self.judging_floor),
                          "saturated_fraction": round(float(self.saturated_fraction), 4),
+                         "interaction_fraction": round(float(self.interaction_fraction), 4),
+                         "masked_per_trajectory": self.masked,
                          "train_rmse_rad": float(self.baseline_train_rmse),
                          "per_joint_heldout_rmse_rad": [float(x) for x in self.per_joint_heldout_rmse],
                          "noise_floor_per_joint_rad": [float(x) for x in self.noise_floor_per_joint]},
@@ -152,6 +156,9 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     if tr_ss.saturated_fraction or he_ss.saturated_fraction:
         log(f"torque-saturated bursts (a motor at its limit, +-{PAD_S:g} s): {tr_ss.saturated_fraction:.1%} of train, "
             f"{he_ss.saturated_fraction:.1%} of held-out samples simulated but not scored")
+    if tr_ss.interaction_fraction or he_ss.interaction_fraction:
+        log(f"grasps and stalls against the scene (arm-only replay): {tr_ss.interaction_fraction:.1%} of train, "
+            f"{he_ss.interaction_fraction:.1%} of held-out samples simulated but not scored")
     empty = Group.of(copies())
     (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], fixed, [empty], [empty.u[None]])
     base_tr_rmse, base_he_rmse = float(np.sqrt(b_tr[0][0])), float(np.sqrt(b_he[0][0]))
@@ -240,7 +247,8 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     verdict, msg, judge = judge_verdict(base_he_rmse, floor, suspects, cfg, left_out=unscreened(cfg.candidates, present))
     # the verdict (msg) is printed once, by the caller (CLI: on stdout)
     return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), verdict == "found", suspects, feats,
-                     msg, verdict == "unexplained", verdict, judge, he_ss.saturated_fraction)
+                     msg, verdict == "unexplained", verdict, judge, he_ss.saturated_fraction, he_ss.interaction_fraction,
+                     {t.name: t.meta["interaction"] for t in train + heldout if "interaction" in t.meta})
 
 
 def judging_floor(noise_floor: float, replay_floor: float) -> float:

@@ -51,8 +51,10 @@ def _worker_init(config: SimConfig) -> None:
 
 
 def _worker_run(args):
-    q0, qd0, cmd, specs = args
-    return _WORKER_SIM.rollout(q0, qd0, cmd, _effects_from_specs(specs))
+    from realm_ms.sysid.closed_loop import bind
+
+    q0, qd0, cmd, specs, closed = args
+    return _WORKER_SIM.rollout(q0, qd0, bind(closed, cmd), _effects_from_specs(specs), steps=cmd.shape[1])
 
 
 def _theta_rows(fx: Effect, rows) -> np.ndarray:
@@ -228,10 +230,13 @@ class Evaluator:
         self.close()
 
     # ------------------------------------------------------------------ core
-    def rollout(self, q0, qd0, cmd, effects: list[Effect]) -> np.ndarray:
+    def rollout(self, q0, qd0, cmd, effects: list[Effect], closed=None) -> np.ndarray:
         """Batched rollout (E arms) -> (E, S + 1, 7); effects' theta has E rows or 1. Each distinct
-        arm (``arm_keys``) is simulated once, and not at all when the cache holds it."""
+        arm (``arm_keys``) is simulated once, and not at all when the cache holds it.
+        ``closed``: closed-loop DROID commands (``closed_loop.ClosedLoopCommand``), E rows."""
         keys = arm_keys(q0, qd0, cmd, effects)
+        if closed is not None:
+            keys = [k + closed.key(i) for i, k in enumerate(keys)]
         rows = {k: self.cache.get(k) for k in keys}
         todo = list(dict.fromkeys(k for k in keys if rows[k] is None))
         self.cache.hits += len(keys) - len(todo)
@@ -242,15 +247,21 @@ class Evaluator:
                 first_of.setdefault(k, i)
             first = np.array([first_of[k] for k in todo])
             sub = _effects_from_specs([_spec(fx, _theta_rows(fx, first)) for fx in effects])
-            for k, row in zip(todo, self._simulate(q0[first], qd0[first], cmd[first], sub)):
+            sub_closed = None if closed is None else closed.rows(first)
+            for k, row in zip(todo, self._simulate(q0[first], qd0[first], cmd[first], sub, sub_closed)):
                 rows[k] = row
                 self.cache.put(k, row)
         return np.stack([rows[k] for k in keys])
 
-    def _simulate(self, q0, qd0, cmd, effects: list[Effect]) -> np.ndarray:
+    def _simulate(self, q0, qd0, cmd, effects: list[Effect], closed=None) -> np.ndarray:
         """The rollout itself: chunked / in worker processes as configured, or on the GPU."""
         e_count = q0.shape[0]
         if self.device.startswith("cuda"):
+            if closed is not None:
+                from realm_ms.validate import InputError
+
+                raise InputError("--command closed_loop replays on the CPU (its IK runs per arm between physics "
+                                 "steps); add --device cpu")
             return self.sim.rollout(q0, qd0, cmd, effects)
         n_chunks = max(1, -(-e_count // self.max_envs))
         if self.workers > 1 and e_count >= 8:
@@ -263,11 +274,13 @@ class Evaluator:
             # an effect at its off-values on every arm of a chunk replays as if absent (the effects'
             # contract): a chunk of several leaves it out rather than pay its hooks at every step
             specs = [_spec(fx, _theta_rows(fx, rows)) for fx, o in zip(effects, on.T) if len(chunks) == 1 or o[rows].any()]
-            tasks.append((q0[rows], qd0[rows], cmd[rows], specs))
+            tasks.append((q0[rows], qd0[rows], cmd[rows], specs, None if closed is None else closed.rows(rows)))
         if self.workers > 1 and len(tasks) > 1:
             parts = list(self._pool_get().map(_worker_run, tasks))
         else:
-            parts = [self.sim.rollout(q, v, c, _effects_from_specs(s)) for q, v, c, s in tasks]
+            from realm_ms.sysid.closed_loop import bind
+
+            parts = [self.sim.rollout(q, v, bind(cl, c), _effects_from_specs(s), steps=c.shape[1]) for q, v, c, s, cl in tasks]
         out = np.empty((e_count, *parts[0].shape[1:]), parts[0].dtype)
         for rows, part in zip(chunks, parts):
             out[rows] = part
@@ -286,7 +299,8 @@ class Evaluator:
             e = make_effect(fx.name, None, fx.config_dict())
             e.set_theta(rows)
             expanded.append(e)
-        hist = self.rollout(segset.q0[idx], segset.qd0[idx], segset.cmd[idx], expanded)
+        closed = None if segset.closed is None else segset.closed.rows(idx)
+        hist = self.rollout(segset.q0[idx], segset.qd0[idx], segset.cmd[idx], expanded, closed)
         return segset.sample(hist, idx)
 
     def evaluate(self, segset: SegmentSet, effects: list[Effect], n_candidates: int = 1) -> Scores:

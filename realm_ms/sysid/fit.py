@@ -178,7 +178,8 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
         rows = [i for i, s in enumerate(ss.segments) if s.traj == ti]
         rr = res[rows][ss.mask[rows]]
         per_traj.append({"name": tr.name, "rmse_rad": float(np.sqrt(np.mean(rr**2))) if rr.size else None,
-                         "max_abs_error_rad": float(np.max(np.abs(rr))) if rr.size else None})
+                         "max_abs_error_rad": float(np.max(np.abs(rr))) if rr.size else None,
+                         "masked": tr.meta.get("interaction")})
     # error over time: RMS over joints per scored sample, with its trajectory time
     over_time = []
     for i, s in enumerate(ss.segments):
@@ -193,6 +194,7 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
         "per_joint_max_abs_error_rad": [float(x) for x in np.max(np.abs(allres), axis=0)],
         "noise_floor_rad": floor,
         "saturated_fraction": ss.saturated_fraction,
+        "interaction_fraction": ss.interaction_fraction,
         "noise_floor_per_joint_rad": [float(x) for x in floor_j],
         "trajectories": per_traj,
         "error_over_time": over_time,

@@ -205,11 +205,13 @@ class MujocoReference:
         return -f * np.tanh(qd / self.joint_physics.friction_velocity)
 
     # ------------------------------------------------------------------ rollout
-    def rollout(self, q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray, effects: list | None = None,
-                record_every: int = 1) -> np.ndarray:
+    def rollout(self, q0: np.ndarray, qd0: np.ndarray, cmd, effects: list | None = None,
+                record_every: int = 1, steps: int | None = None) -> np.ndarray:
         """Simulate E arms from (q0, qd0) tracking ``cmd`` (E, S, 7), one target per law tick.
 
         ``effects`` (``law="driver"`` only): actuation stages with theta of E rows or 1.
+        ``cmd`` may instead be a function ``cmd(k, q) -> (E, 7)`` of the tick and the arms' joints,
+        with ``steps`` = S (a closed-loop command; the replay simulator's convention).
         Returns joint positions (E, S + 1, 7) after 0..S ticks (float64).
         """
         import mujoco
@@ -217,7 +219,10 @@ class MujocoReference:
         effects = list(effects or [])
         if effects and self.config.law != "driver":
             raise ValueError("hidden effects need MujocoConfig(law='driver') (they are realm-ms actuation stages)")
-        e_count, steps = cmd.shape[0], cmd.shape[1]
+        closed_loop = callable(cmd)
+        if closed_loop and steps is None:
+            raise ValueError("a closed-loop command needs steps=")
+        e_count, steps = (q0.shape[0], steps) if closed_loop else (cmd.shape[0], cmd.shape[1])
         j = self.joints
         datas = []
         for i in range(e_count):
@@ -236,11 +241,12 @@ class MujocoReference:
         sub = self.config.substeps
         friction_in_driver = driver is not None
         for k in range(steps):
+            target = np.asarray(cmd(k, out[:, k]), dtype=np.float64) if closed_loop else cmd[:, k]
             if driver is not None:
-                tau_all = self._driver_torque(driver, datas, cmd[:, k])
+                tau_all = self._driver_torque(driver, datas, target)
             for i, (m, d) in enumerate(datas):
                 mujoco.mj_step1(m, d)
-                tau = tau_all[i] if driver is not None else self._law(m, d, np.asarray(cmd[i, k], float)[j], jacp, jacr)
+                tau = tau_all[i] if driver is not None else self._law(m, d, np.asarray(target[i], float)[j], jacp, jacr)
                 for s in range(sub):
                     if s:
                         mujoco.mj_step1(m, d)

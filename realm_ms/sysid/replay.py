@@ -74,6 +74,8 @@ class SegmentSet:
     mask: np.ndarray  # (N, L) bool, scored samples
     sample_idx: np.ndarray  # (N, L) sample index into the trajectory (-1 = padding)
     saturated_fraction: float = 0.0  # share of the scorable samples left out as torque-saturated (``saturation.py``)
+    closed: object | None = None  # ``closed_loop.ClosedLoopCommand`` per segment (``--command closed_loop``)
+    interaction_fraction: float = 0.0  # share of the scorable samples left out as grasps/stalls (``interaction.py``)
 
     @property
     def n(self) -> int:
@@ -86,9 +88,11 @@ class SegmentSet:
     @classmethod
     def build(cls, trajs: list[Trajectory], physics_hz: float = 120.0, length_s: float = 5.0,
               burn_in_s: float = 1.0, snap_s: float = 0.6, gains: str = "polymetis",
-              score_saturated: bool = False) -> "SegmentSet":
+              score_saturated: bool = False, score_interaction: bool = False) -> "SegmentSet":
         """``score_saturated=False``: samples in torque-saturated bursts (``saturation.py``) are
-        simulated but not scored."""
+        simulated but not scored; ``score_interaction=False``: nor are grasps and stalls against
+        the scene (``interaction.py``; each trajectory's share lands in ``meta["interaction"]``)."""
+        from realm_ms.sysid.interaction import free_motion
         from realm_ms.sysid.saturation import unsaturated
         from realm_ms.validate import check_non_negative, check_positive
 
@@ -136,7 +140,9 @@ class SegmentSet:
         sample_idx = -np.ones((n, n_samp), dtype=np.int64)
         vel = [tr.velocity() for tr in trajs]
         keep = [None if score_saturated else unsaturated(tr, gains) for tr in trajs]
+        free = [None if score_interaction else free_motion(tr) for tr in trajs]
         unsat = np.ones((n, n_samp), dtype=bool)
+        loose = np.ones((n, n_samp), dtype=bool)
         for i, s in enumerate(segs):
             tr = trajs[s.traj]
             tt = tr.t[s.start:s.stop] - tr.t[s.start]
@@ -149,12 +155,21 @@ class SegmentSet:
             mask[i, s.score_from - s.start:m] = True
             if keep[s.traj] is not None:
                 unsat[i, :m] = keep[s.traj][s.start:s.stop]
+            if free[s.traj] is not None:
+                loose[i, :m] = free[s.traj][s.start:s.stop]
             sample_idx[i, :m] = np.arange(s.start, s.stop)
         left_out = 0.0
         if (mask & unsat).any():  # a log saturated throughout is scored whole rather than not at all
             left_out = 1.0 - (mask & unsat).sum() / mask.sum()
             mask &= unsat
-        return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx, float(left_out))
+        in_contact = 0.0
+        if (mask & loose).any():  # likewise a log in contact throughout
+            in_contact = 1.0 - (mask & loose).sum() / mask.sum()
+            mask &= loose
+        from realm_ms.sysid.closed_loop import from_segments
+
+        return cls(trajs, segs, dt, q0, qd0, cmd, pos, meas, mask, sample_idx, float(left_out),
+                   from_segments(trajs, segs, dt), float(in_contact))
 
     @classmethod
     def stack(cls, sets: list["SegmentSet"]) -> "SegmentSet":
@@ -184,9 +199,13 @@ class SegmentSet:
             trajs += s.trajs
         scored = [s.mask.sum() for s in sets]
         left_out = sum(s.saturated_fraction * m for s, m in zip(sets, scored)) / max(sum(scored), 1)
+        in_contact = sum(s.interaction_fraction * m for s, m in zip(sets, scored)) / max(sum(scored), 1)
+        from realm_ms.sysid.closed_loop import from_segments
+
         return cls(trajs, segs, sets[0].dt, np.concatenate([s.q0 for s in sets]), np.concatenate([s.qd0 for s in sets]),
                    cat("cmd", n_steps), cat("pos", n_samp), cat("meas", n_samp, 0.0), cat("mask", n_samp, False),
-                   cat("sample_idx", n_samp, -1), float(left_out))
+                   cat("sample_idx", n_samp, -1), float(left_out), from_segments(trajs, segs, sets[0].dt),
+                   float(in_contact))
 
     @staticmethod
     def split(sets: list["SegmentSet"], sim: np.ndarray, n_candidates: int) -> list[np.ndarray]:

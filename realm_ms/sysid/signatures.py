@@ -191,6 +191,13 @@ def _latency(f, fx, v, size):
             f"{np.std(f.lag_s) * 1e3:.0f} ms), residual ∝ -q̇ → command latency, {size}")
 
 
+def _target_filter(f, fx, v, size):
+    lag = float(np.median(f.lag_s))
+    j = _top(f.corr_vel, f)
+    return (f"measured motion lags the simulation by {lag * 1e3:.0f} ms on all joints and is smoother (residual ∝ -q̇, "
+            f"corr {f.corr_vel[j]:+.2f} on {_j(j)}) → a low-pass filter on the targets, {size}")
+
+
 def _gain(f, fx, v, size):
     j = _top(f.corr_err, f)
     return (f"residual scales with the tracking error (corr {f.corr_err[j]:+.2f} with q*-q on {_j(j)}) on all joints "
@@ -226,6 +233,7 @@ SENTENCES: dict[str, Callable] = {
     "payload": _payload,
     "gravity_comp_error": _gravity,
     "latency": _latency,
+    "target_filter": _target_filter,
     "gain_mismatch": _gain,
     "torque_limit": _torque_limit,
     "backlash": _backlash,

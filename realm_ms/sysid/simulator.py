@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 import torch
@@ -117,14 +118,20 @@ class ReplaySimulator:
             self._targets.append(BuildTarget(art, list(range(7)), self._flange_offset))
 
     # ------------------------------------------------------------------ rollout
-    def rollout(self, q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray, effects: list[Effect],
-                record_every: int = 1) -> np.ndarray:
+    def rollout(self, q0: np.ndarray, qd0: np.ndarray, cmd: np.ndarray | Callable[[int, np.ndarray], np.ndarray],
+                effects: list[Effect], record_every: int = 1, steps: int | None = None) -> np.ndarray:
         """Simulate E arms from (q0, qd0) tracking ``cmd`` (E, S, 7) (one target per physics step).
 
-        ``effects``: stages with theta of shape (E, n) or (1, n). Returns joint positions
-        (E, S + 1, 7) after 0..S steps (float64).
+        ``cmd`` may instead be a function ``cmd(k, q) -> (E, 7)`` of the physics step k and the arms'
+        joint positions q (E, 7) before it, with ``steps`` = S: a closed-loop command (a DROID
+        action turned into a joint target from the simulated state, as the robot did from its
+        measured one). ``effects``: stages with theta of shape (E, n) or (1, n). Returns joint
+        positions (E, S + 1, 7) after 0..S steps (float64).
         """
-        e_count, steps = cmd.shape[0], cmd.shape[1]
+        closed_loop = callable(cmd)
+        if closed_loop and steps is None:
+            raise ValueError("a closed-loop command needs steps=")
+        e_count, steps = (q0.shape[0], steps) if closed_loop else (cmd.shape[0], cmd.shape[1])
         self._ensure(e_count)
         arms = self.arms[:e_count]
         t0 = time.perf_counter()
@@ -146,7 +153,7 @@ class ReplaySimulator:
         actuation = ActuationModel(sorted(effects, key=lambda fx: fx.order))
         driver = self._driver(e_count, actuation)
         driver.reset(torch.as_tensor(q0, dtype=torch.float32))
-        cmd_t = torch.as_tensor(cmd, dtype=torch.float32)
+        cmd_t = None if closed_loop else torch.as_tensor(cmd, dtype=torch.float32)
         out = np.empty((e_count, steps + 1, 7), dtype=np.float64)
         out[:, 0] = q0
         prof = self.profile
@@ -163,7 +170,8 @@ class ReplaySimulator:
                 if bar is not None and k % 40 == 0:
                     bar.update(min(40, steps - k))
                 b = time.perf_counter()
-                driver.set_target(cmd_t[:, k])
+                target = torch.as_tensor(cmd(k, qbuf), dtype=torch.float32) if closed_loop else cmd_t[:, k]
+                driver.set_target(target)
                 tau = driver.torque(torch.from_numpy(qbuf), torch.from_numpy(vbuf), self.dt).numpy()
                 c = time.perf_counter()
                 for i, art in enumerate(arms):

@@ -119,3 +119,83 @@ def synth(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None, eval
     info = {"hidden": hidden, "engine": cfg.engine, "truth": model.params(), "config": asdict(cfg)}
     (out / "synth.json").write_text(json.dumps(info, indent=2, default=float))
     return info
+
+
+def simulate_droid(model: RobotModel, references: list[np.ndarray], action_space: str, control_hz: float,
+                   evaluator=None, settle_s: float = 1.0) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """A synthetic DROID robot run closed loop: at each 15 Hz step a teleoperator picks the action in
+    ``action_space`` that asks for the step's joint reference from the arm's state, and DROID's
+    conversion turns it into the joint target the controller tracks (``closed_loop.py``, reference
+    mode). Returns (t, q, actions, joint targets) per trajectory, one sample per command."""
+    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
+    from realm_ms.sysid.engine import Evaluator
+    from realm_ms.sysid.replay import held_commands
+    from realm_ms.sysid.simulator import SimConfig
+
+    ev = evaluator or Evaluator(SimConfig.from_model(model), workers=1, device="cpu")
+    dt = 1.0 / getattr(ev, "physics_hz", model.physics_hz)
+    ts = [np.arange(len(r)) / control_hz for r in references]
+    steps = max(int(np.ceil((t[-1] + 1.0 / control_hz + settle_s) / dt)) for t in ts) + 1
+    k = max(len(r) for r in references)
+    switch = np.full((len(references), k), NEVER, dtype=np.int64)
+    refs = np.zeros((len(references), k, 7))
+    for i, (t, r) in enumerate(zip(ts, references)):
+        switch[i, :len(r)] = np.ceil((t + settle_s) / dt - 1e-6).astype(np.int64)
+        refs[i, :len(r)] = r
+    closed = ClosedLoopCommand(action_space, switch, refs, reference=True)
+    # before the first command the arm settles at the first reference (held_commands pads it)
+    cmd = np.stack([held_commands(np.r_[0.0, t + settle_s], np.vstack([r[:1], r]), steps, dt) for t, r in zip(ts, references)])
+    q0 = np.stack([r[0] for r in references])
+    sim = getattr(ev, "sim", ev)  # the simulator itself: the closed loop records what it sent
+    hist = sim.rollout(q0, np.zeros_like(q0), bind(closed, cmd), model.actuation().stages, steps=cmd.shape[1])
+    out = []
+    for i, (t, r) in enumerate(zip(ts, references)):
+        pos = (t + settle_s) / dt  # the state each command was computed from: the sample at its switch
+        q = hist[i, np.ceil(pos - 1e-6).astype(int)]
+        out.append((t, q, closed.sent[i, :len(r)], closed.targets[i, :len(r)]))
+    return out
+
+
+def synth_droid(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None, action_space: str = "cartesian_position",
+                formats: tuple[str, ...] = ("npz",), log_joint_target: bool = False, evaluator=None) -> dict:
+    """DROID-format episodes of a robot with ``hidden`` effects, commanded in ``action_space``
+    (``simulate_droid``), written in every format of ``formats`` (``droid_formats.FORMATS``) under
+    ``OUT/<format>/{train,heldout}/``, plus ``truth.yaml`` and ``synth.json``. ``log_joint_target``
+    also logs the joint target DROID sent (as DROID's own logs do); without it readers rebuild it."""
+    from realm_ms.agents.droid_action_spaces import check_action_space
+    from realm_ms.sysid.droid_formats import FORMATS, DroidLog, write_lerobot, write_log
+
+    cfg = cfg or SynthConfig()
+    cfg.hidden = hidden
+    check_action_space(action_space, None)
+    unknown = [f for f in formats if f not in FORMATS]
+    if unknown:
+        raise ValueError(f"unknown format(s) {unknown}; known: {', '.join(FORMATS)}")
+    model = hidden_model(hidden, cfg)
+    ecfg = ExciteConfig(**{**asdict(cfg.excite), "duration_s": cfg.duration_s, "control_hz": cfg.control_hz})
+    refs = excite(cfg.n_train + cfg.n_heldout, cfg.seed, ecfg)
+    if cfg.engine == "mujoco" and evaluator is None:
+        evaluator = reference_engine(model)
+    sims = simulate_droid(model, refs, action_space, cfg.control_hz, evaluator)
+    rng = np.random.default_rng(cfg.seed + 1_000_003)
+    logs = {"train": [], "heldout": []}
+    for i, (t, q, actions, targets) in enumerate(sims):
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(targets))):
+            raise RuntimeError(f"hidden model {hidden!r} diverged in the simulator; lower its parameters")
+        commands = {action_space: actions} | ({"joint_position": targets} if log_joint_target else {})
+        noisy = q + rng.normal(0.0, cfg.noise_rad, size=q.shape)
+        logs["train" if i < cfg.n_train else "heldout"].append(
+            DroidLog(f"ep_{i:03d}", t, noisy, commands, np.zeros(len(t)), {"position": np.zeros(len(t))}))
+    out = Path(out_dir)
+    for fmt in formats:
+        for split, group in logs.items():
+            if fmt == "lerobot":
+                write_lerobot(out / fmt / split, group, cfg.control_hz)
+            else:
+                for log in group:
+                    write_log(out / fmt / split, log, fmt)
+    model.save(out / "truth.yaml")
+    info = {"hidden": hidden, "engine": cfg.engine, "action_space": action_space, "formats": list(formats),
+            "joint_target_logged": log_joint_target, "truth": model.params(), "config": asdict(cfg)}
+    (out / "synth.json").write_text(json.dumps(info, indent=2, default=float))
+    return info

@@ -79,7 +79,7 @@ CASES: list[Case] = [
     cli("npz-empty-file", f"sysid compare {{root}}/empty_npz {CPU}", r"empty_npz/traj\.npz: not an \.npz archive \(empty\)"),
     cli("npz-binary-garbage", f"sysid compare {{root}}/not_zip_npz {CPU}", r"not_zip_npz/traj\.npz: not an \.npz archive \(not a zip archive\)"),
     cli("npz-npy-renamed", f"sysid compare {{root}}/npy_as_npz.npz {CPU}", r"npy_as_npz\.npz: not an \.npz archive"),
-    cli("data-dir-without-data", f"sysid compare {{root}}/no_data {CPU}", r"no_data: no \.npz trajectories and no LeRobot dataset"),
+    cli("data-dir-without-data", f"sysid compare {{root}}/no_data {CPU}", r"no_data: no \.npz trajectories \(nor \.json, \.csv, trajectory\.h5\) and no LeRobot dataset"),
     cli("data-is-a-text-file", f"sysid compare {{root}}/a_file.txt {CPU}", r"a_file\.txt: expected a directory of \.npz files"),
     # ------------------------------------------------------------------------ LeRobot data
     cli("lerobot-info-list", f"sysid compare {{root}}/lr_list {CPU}", r"lr_list/meta/info\.json: expected a JSON object .* got list"),

@@ -20,7 +20,9 @@ class Latency(Effect):
 
     @classmethod
     def param_specs(cls, config):
-        return [ParamSpec("delay", "s", 0.02, 0.0, 0.1, 0.0, per_joint=False, doc="transport delay of the joint targets")]
+        # 0.3 s: a DROID site's path from policy to torque loop (network, threads, 15 Hz hand-over) can
+        # exceed 100 ms
+        return [ParamSpec("delay", "s", 0.02, 0.0, 0.3, 0.0, per_joint=False, doc="transport delay of the joint targets")]
 
     def reset(self, num_envs, device, env_idx, q):
         if env_idx is None or getattr(self, "_hist", None) is None or self._hist.shape[1] != num_envs:

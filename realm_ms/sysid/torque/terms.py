@@ -22,7 +22,7 @@ the motors must *add* (friction has the sign of q̇, as in Gaz et al. 2019).
 Y_k is body k's inverse-dynamics regressor (``agents/effects/inertial.py``), computed once per
 sample set, so a fit of inertial parameters costs no dynamics evaluations.
 
-eps = 0.01 rad/s (the smooth sign). Tracking effects (latency, gain_mismatch, torque_limit,
+eps = 0.01 rad/s (the smooth sign). Tracking effects (latency, target_filter, gain_mismatch, torque_limit,
 backlash, encoder_bias) act through the position controller and have no torque-space form: they
 need ``q_cmd`` (``TRACKING_ONLY``).
 """
@@ -37,7 +37,7 @@ import torch
 from realm_ms.agents.effects.parameter import ParamSpec
 
 EPS = 0.01  # rad/s, smooth sign of the friction laws
-TRACKING_ONLY = ("latency", "gain_mismatch", "torque_limit", "backlash", "encoder_bias")
+TRACKING_ONLY = ("latency", "target_filter", "gain_mismatch", "torque_limit", "backlash", "encoder_bias")
 
 
 @dataclass

@@ -1,0 +1,54 @@
+"""Closed-loop replay of real DROID episodes: flange error, lag and first-order response b, sim beside real.
+
+    python bench/droid_alignment.py DATA_DIR [--model MODEL.yaml|droid-aligned] [--split heldout|heldin|all]
+        [--episodes N] [--per-episode] [--json OUT.json] [--write-npz DIR]
+
+DATA_DIR: episodes as ``../shared/droid_real`` holds them (``index.json`` + ``episodes/*.npz`` with
+``q`` and ``cartesian_position_cmd``). The split is ``realm_ms.sysid.alignment.heldout_split``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from realm_ms.errors import UserError
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("data")
+    ap.add_argument("--model", default=None, help="robot model file or name (default: the nominal robot)")
+    ap.add_argument("--split", choices=("heldout", "heldin", "all"), default="all")
+    ap.add_argument("--episodes", type=int, default=0, help="first N episodes of the split (0 = all)")
+    ap.add_argument("--per-episode", action="store_true")
+    ap.add_argument("--json", default=None)
+    ap.add_argument("--write-npz", default=None, metavar="DIR",
+                    help="also write the split's episodes as the workbench's npz (q_cmd rebuilt from the measured state)")
+    args = ap.parse_args(argv)
+    from realm_ms.sysid import alignment
+
+    try:
+        eps = alignment.read_droid_episodes(args.data)
+        held_in, held_out = alignment.heldout_split(eps)
+        eps = {"all": eps, "heldin": held_in, "heldout": held_out}[args.split]
+        if args.episodes:
+            eps = eps[: args.episodes]
+        if args.write_npz:
+            alignment.write_workbench_npz(eps, args.write_npz)
+            print(f"wrote {len(eps)} workbench npz files to {args.write_npz}")
+        res = alignment.align(eps, args.model, args.model or "nominal")
+    except (UserError, ValueError, FileNotFoundError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print(res.table(args.per_episode))
+    print(f"{len(eps)} episodes ({args.split}), {res.seconds:.0f} s")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(res.to_dict(), f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,251 @@
+"""How closely the simulated DROID arm answers real DROID commands: closed-loop replay and its metrics.
+
+A real DROID episode holds the measured joints ``q`` (T, 7) and, per step, the commanded flange
+pose ``cartesian_position`` (T, 6). The replay puts the simulated arm at the measured start and
+sends every step's command in DROID's ``cartesian_position`` space, turned into a joint target from
+the *simulated* state (``agents/droid_action_spaces.py``, as the robot did from its measured one),
+on the sysid replay simulator: the benchmark's controller, robot and effects (``ReplaySimulator``).
+
+Metrics, the simulated arm beside the real one (flange = ``panda_link8``, forward kinematics of q):
+
+- ``flange_mm``: median over the steps of |p_sim - p_real| in mm (an episode's flange error);
+- ``lag``: the steps k (0..``MAX_LAG``) after which the flange is closest, on average over the
+  episode, to where a command pointed: argmin_k mean_t |p[t + k] - c[t]|;
+- ``b``: the first-order per-step response p[t+1] - p[t] = b (c[t] - p[t]), least squares over the
+  episode's steps and axes (1 = the flange reaches the command in one step).
+
+Per-lab rows are medians over the lab's episodes. The arm alone is replayed: the gripper is locked
+(its mass lumped), and grasps, pushes and contacts with the scene are not modelled.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+#: largest lag (control steps) searched for
+MAX_LAG = 10
+#: every ``HELDOUT_EVERY``-th episode of a lab (by episode index, starting at the third) is held out
+HELDOUT_EVERY = 3
+
+
+@dataclass
+class DroidEpisode:
+    """One real DROID episode: measured joints and the commanded flange poses at 15 Hz."""
+
+    name: str
+    lab: str
+    q: np.ndarray  # (T, 7) rad, measured
+    cartesian_cmd: np.ndarray  # (T, 6) m / rad euler "xyz", commanded flange pose of each step
+    gripper: np.ndarray  # (T,) measured, 0 open .. 1 closed
+    control_hz: float = 15.0
+
+    @property
+    def steps(self) -> int:
+        return len(self.q)
+
+
+def read_droid_episodes(data_dir: str | Path) -> list[DroidEpisode]:
+    """The ``.npz`` episodes of ``data_dir`` (or its ``episodes/``), keys ``q``,
+    ``cartesian_position_cmd``, optional ``gripper``; ``index.json`` (``file``, ``lab``) names the
+    labs when present, else the file name's last ``_`` part does."""
+    from realm_ms.errors import UserError
+
+    root = Path(data_dir)
+    if not root.exists():
+        raise UserError(f"{root}: no such directory; pass a directory of DROID episode .npz files")
+    folder = root / "episodes" if (root / "episodes").is_dir() else root
+    files = [folder] if folder.is_file() else sorted(folder.glob("*.npz"))
+    if not files:
+        raise UserError(f"{root}: no .npz episodes found; pass a directory of DROID episode .npz files")
+    labs = {}
+    index = root / "index.json"
+    if index.is_file():
+        labs = {e["file"]: e.get("lab", "?") for e in json.loads(index.read_text())}
+    out = []
+    for f in files:
+        with np.load(f) as z:
+            missing = [k for k in ("q", "cartesian_position_cmd") if k not in z.files]
+            if missing:
+                raise UserError(f"{f}: missing {', '.join(missing)} (has {', '.join(z.files)}); a DROID episode needs "
+                                f"q (T, 7) measured joints and cartesian_position_cmd (T, 6) commanded flange poses")
+            q, c = np.asarray(z["q"], float), np.asarray(z["cartesian_position_cmd"], float)
+            g = np.asarray(z["gripper"], float) if "gripper" in z.files else np.zeros(len(q))
+        if q.ndim != 2 or q.shape[1] != 7 or c.shape != (len(q), 6) or len(q) < 2:
+            raise UserError(f"{f}: q must be (T, 7) and cartesian_position_cmd (T, 6) with T >= 2, "
+                            f"got {q.shape} and {c.shape}")
+        if not (np.isfinite(q).all() and np.isfinite(c).all()):
+            raise UserError(f"{f}: q or cartesian_position_cmd holds NaN/inf; drop those steps")
+        lab = labs.get(f.name) or f.stem.rsplit("_", 1)[-1]
+        out.append(DroidEpisode(f.stem, lab, q, c, g))
+    return out
+
+
+def heldout_split(episodes: list[DroidEpisode]) -> tuple[list[DroidEpisode], list[DroidEpisode]]:
+    """(held in, held out): per lab, episodes sorted by name, every ``HELDOUT_EVERY``-th from the
+    third on is held out (about a third of every lab with three or more episodes)."""
+    held_in, held_out = [], []
+    for lab in sorted({e.lab for e in episodes}):
+        eps = sorted((e for e in episodes if e.lab == lab), key=lambda e: e.name)
+        for i, e in enumerate(eps):
+            (held_out if i % HELDOUT_EVERY == HELDOUT_EVERY - 1 else held_in).append(e)
+    return held_in, held_out
+
+
+# ---------------------------------------------------------------------------- response metrics
+def response_lag(p: np.ndarray, c: np.ndarray, max_lag: int = MAX_LAG) -> int:
+    """Steps after which positions ``p`` (T, 3) are closest on average to the commands ``c`` (T, 3)."""
+    n = len(p) - max_lag
+    if n < 1:
+        max_lag, n = len(p) - 1, 1
+    err = [np.linalg.norm(p[k:k + n] - c[:n], axis=1).mean() for k in range(max_lag + 1)]
+    return int(np.argmin(err))
+
+
+def response_b(p: np.ndarray, c: np.ndarray) -> float:
+    """Least-squares b of p[t+1] - p[t] = b (c[t] - p[t]) over steps and axes."""
+    dp, e = p[1:] - p[:-1], c[:-1] - p[:-1]
+    den = float((e * e).sum())
+    return float((dp * e).sum() / den) if den > 0 else float("nan")
+
+
+@dataclass
+class EpisodeAlignment:
+    name: str
+    lab: str
+    steps: int
+    flange_mm: float  # median |p_sim - p_real| over the steps
+    flange_mm_mean: float
+    joint_mrad: list[float]  # median |q_sim - q_real| per joint
+    lag_real: int
+    lag_sim: int
+    b_real: float
+    b_sim: float
+
+
+@dataclass
+class LabAlignment:
+    lab: str
+    episodes: int
+    flange_mm: float  # median of the episodes' medians
+    lag_real: float
+    lag_sim: float
+    b_real: float
+    b_sim: float
+
+
+@dataclass
+class AlignmentResult:
+    """Per-episode and per-lab rows and the overall medians (``overall`` is a ``LabAlignment``
+    named ``all``)."""
+
+    model: str
+    episodes: list[EpisodeAlignment] = field(default_factory=list)
+    labs: list[LabAlignment] = field(default_factory=list)
+    overall: LabAlignment | None = None
+    seconds: float = 0.0
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def table(self, per_episode: bool = False) -> str:
+        head = f"{'':<28} {'eps':>4} {'flange mm':>9} {'lag real':>8} {'lag sim':>7} {'b real':>6} {'b sim':>6}"
+        rows = [f"robot model: {self.model}", head]
+        if per_episode:
+            for e in self.episodes:
+                rows.append(f"{e.name:<28} {1:>4} {e.flange_mm:>9.1f} {e.lag_real:>8d} {e.lag_sim:>7d} "
+                            f"{e.b_real:>6.2f} {e.b_sim:>6.2f}")
+        for r in self.labs + ([self.overall] if self.overall else []):
+            rows.append(f"{r.lab:<28} {r.episodes:>4} {r.flange_mm:>9.1f} {r.lag_real:>8.1f} {r.lag_sim:>7.1f} "
+                        f"{r.b_real:>6.2f} {r.b_sim:>6.2f}")
+        return "\n".join(rows)
+
+
+def summarize(name: str, rows: list[EpisodeAlignment]) -> LabAlignment:
+    med = lambda xs: float(np.median(xs)) if len(xs) else float("nan")  # noqa: E731
+    return LabAlignment(name, len(rows), med([r.flange_mm for r in rows]), med([r.lag_real for r in rows]),
+                        med([r.lag_sim for r in rows]), med([r.b_real for r in rows]), med([r.b_sim for r in rows]))
+
+
+def compare_episode(ep: DroidEpisode, q_sim: np.ndarray, ik=None) -> EpisodeAlignment:
+    """The metrics of one episode from its simulated joints ``q_sim`` (T, 7)."""
+    from realm_ms.agents.droid_action_spaces import DroidIK
+
+    ik = ik or DroidIK()
+    p_real = ik.flange(ep.q)[:, :3, 3]
+    p_sim = ik.flange(q_sim)[:, :3, 3]
+    c = ep.cartesian_cmd[:, :3]
+    d = np.linalg.norm(p_sim - p_real, axis=1) * 1e3
+    return EpisodeAlignment(
+        ep.name, ep.lab, ep.steps, float(np.median(d)), float(d.mean()),
+        [float(x) for x in np.median(np.abs(q_sim - ep.q), axis=0) * 1e3],
+        response_lag(p_real, c), response_lag(p_sim, c), response_b(p_real, c), response_b(p_sim, c))
+
+
+# ---------------------------------------------------------------------------- closed-loop replay
+def replay_closed_loop(episodes: list[DroidEpisode], model=None, sim=None) -> list[np.ndarray]:
+    """Simulated joints (T, 7) per episode: all episodes as arms of one batch, each step's
+    ``cartesian_position`` command turned into a joint target from the simulated state (DROID's
+    IK, targets clipped to the joint limits; ``closed_loop.ClosedLoopCommand``), held for the
+    control period; a finished episode holds its last target. ``model``: a robot model (path,
+    dict, ``RobotModel``; None = the nominal robot)."""
+    from realm_ms.agents.robot_model import load_robot_model
+    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
+    from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
+
+    model = load_robot_model(model)
+    sim = sim or ReplaySimulator(SimConfig.from_model(model))
+    sub = int(round(model.physics_hz / episodes[0].control_hz))
+    lengths = np.array([e.steps for e in episodes])
+    steps = int(lengths.max())
+    k = np.arange(steps)[None]
+    switch = np.where(k < lengths[:, None], k * sub, NEVER)
+    cmds = np.stack([np.concatenate([e.cartesian_cmd, np.repeat(e.cartesian_cmd[-1:], steps - e.steps, 0)]) for e in episodes])
+    q0 = np.stack([e.q[0] for e in episodes])
+    closed = ClosedLoopCommand("cartesian_position", switch, cmds)  # every arm switches at step 0
+    out = sim.rollout(q0, np.zeros_like(q0), bind(closed, q0[:, None]), list(model.effects), steps=(steps - 1) * sub)
+    return [out[i, : e.steps * sub : sub] for i, e in enumerate(episodes)]
+
+
+def align(episodes: list[DroidEpisode], model=None, model_name: str | None = None) -> AlignmentResult:
+    """Replay ``episodes`` closed loop under ``model`` and tabulate the metrics per episode and lab."""
+    import time
+
+    from realm_ms.agents.droid_action_spaces import DroidIK
+
+    t0 = time.perf_counter()
+    sims = replay_closed_loop(episodes, model)
+    ik = DroidIK()
+    rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims)]
+    labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
+    name = model_name or (str(model) if model is not None and not isinstance(model, dict) else "nominal")
+    return AlignmentResult(name, rows, labs, summarize("all", rows), time.perf_counter() - t0)
+
+
+# ---------------------------------------------------------------------------- the workbench's npz
+def rebuilt_joint_targets(ep: DroidEpisode, ik=None) -> np.ndarray:
+    """(T, 7) the joint targets DROID streamed, rebuilt from the *measured* state: each step's
+    ``cartesian_position`` command through DROID's conversion at ``q[t]`` (up to its IK's
+    null-space choice), clipped to the joint limits."""
+    from realm_ms.sysid.droid_formats import rebuild_targets
+
+    return rebuild_targets("cartesian_position", ep.cartesian_cmd, ep.q, None, ik=ik)
+
+
+def write_workbench_npz(episodes: list[DroidEpisode], out_dir: str | Path) -> list[Path]:
+    """One ``realm sysid`` npz per episode (``t``, ``q``, ``q_cmd`` from ``rebuilt_joint_targets``,
+    ``gripper``, ``control_hz``)."""
+    from realm_ms.agents.droid_action_spaces import DroidIK
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ik, paths = DroidIK(), []
+    for ep in episodes:
+        p = out / f"{ep.name}.npz"
+        np.savez(p, t=np.arange(ep.steps) / ep.control_hz, q=ep.q, q_cmd=rebuilt_joint_targets(ep, ik),
+                 gripper=ep.gripper, control_hz=ep.control_hz)
+        paths.append(p)
+    return paths
