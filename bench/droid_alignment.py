@@ -1,7 +1,7 @@
 """Closed-loop replay of real DROID episodes: flange error, lag and first-order response b, sim beside real.
 
     python bench/droid_alignment.py DATA_DIR [--model MODEL.yaml|droid-aligned] [--split heldout|heldin|all]
-        [--per-lab N] [--episodes N] [--per-episode] [--json OUT.json] [--write-npz DIR]
+        [--max-steps N] [--per-lab N] [--episodes N] [--per-episode] [--json OUT.json] [--write-npz DIR]
         [--grid 'target_filter.tau=0.06,0.08;coulomb_friction.fc=0,0.6']
 
 DATA_DIR: episodes as ``../shared/droid_real`` holds them (``index.json`` + ``episodes/*.npz`` with
@@ -22,6 +22,7 @@ def main(argv=None) -> int:
     ap.add_argument("data")
     ap.add_argument("--model", default=None, help="robot model file or name (default: the nominal robot)")
     ap.add_argument("--split", choices=("heldout", "heldin", "all"), default="all")
+    ap.add_argument("--max-steps", type=int, default=0, help="only episodes of at most N steps (0 = all): short batches replay fast")
     ap.add_argument("--per-lab", type=int, default=0, help="first N episodes of each lab of the split, by name (0 = all)")
     ap.add_argument("--episodes", type=int, default=0, help="then the first N of those, labs in alphabetical order (0 = all)")
     ap.add_argument("--per-episode", action="store_true")
@@ -38,6 +39,8 @@ def main(argv=None) -> int:
         eps = alignment.read_droid_episodes(args.data)
         held_in, held_out = alignment.heldout_split(eps)
         eps = {"all": eps, "heldin": held_in, "heldout": held_out}[args.split]
+        if args.max_steps:
+            eps = [e for e in eps if e.steps <= args.max_steps]
         if args.per_lab:
             eps = [e for lab in sorted({e.lab for e in eps}) for e in sorted((x for x in eps if x.lab == lab), key=lambda x: x.name)[: args.per_lab]]
         if args.episodes:
