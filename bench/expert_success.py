@@ -1,7 +1,8 @@
 """Scripted-expert success table: REALM tasks x perturbations x N seeds, through `realm eval`'s runner.
 
     .venv/bin/python bench/expert_success.py [--seeds 20] [--tasks ID ...] [--perturbation NAME|all]
-        [--workers N] [--max-steps 800] [--action-space SPACE[:GRIPPER]] [--out outputs/expert_success]
+        [--workers N] [--max-steps 800] [--action-space SPACE[:GRIPPER]] [--robot-model NAME|MODEL.yaml]
+        [--out outputs/expert_success]
 
 Runs the privileged expert (CPU physics, state obs: nothing is rendered) with the same episode
 loop, records and resume as ``realm eval --policy expert``: every finished episode is appended to
@@ -104,6 +105,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="outputs/expert_success", help="run directory; re-run with the same one to resume")
     ap.add_argument("--action-space", default="joint_position", help="DROID action space the expert drives: joint_position | "
                     "joint_velocity | cartesian_velocity | cartesian_position, optionally :position or :velocity for the gripper")
+    ap.add_argument("--robot-model", default=None, help="a named robot model (droid-aligned) or a MODEL.yaml (default: the nominal robot)")
     args = ap.parse_args(argv)
 
     import realm_ms  # noqa: F401
@@ -125,7 +127,9 @@ def main(argv=None) -> int:
         proto = PRESETS["realm"].with_overrides(episodes=args.seeds, seed=0, max_steps=args.max_steps)
         from realm_ms.agents.droid_action_spaces import parse_action_space_flag
 
-        env_kwargs = parse_action_space_flag(args.action_space)
+        from realm_ms.eval.cli import robot_model_kwargs
+
+        env_kwargs = parse_action_space_flag(args.action_space) | robot_model_kwargs(args.robot_model)
         evaluate("expert", tasks, perts, proto, out, workers=args.workers, quiet=False, env_kwargs=env_kwargs)
     except (UserError, ValueError) as e:
         print(f"expert_success: error: {e}", file=sys.stderr)

@@ -40,6 +40,7 @@ class RealmEnvConfig(EnvConfig):
     observation_height: int = DEFAULT_SIZE[1]
     shader: str = "default"  # default (raster) | rt | rt-med | rt-fast
     perturbation: str | None = None  # a REALM perturbation name (None: Default)
+    robot_model: str | None = None  # a named robot model (droid-aligned) or a MODEL.yaml (None: the nominal robot)
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=_features_map)
 
@@ -58,7 +59,8 @@ class RealmEnvConfig(EnvConfig):
     def gym_kwargs(self) -> dict:
         # RealmLeRobotEnv maps these onto realm_ms's RealmEnvConfig (lerobot.rollout.rollout_config)
         return dict(observation_width=self.observation_width, observation_height=self.observation_height,
-                    episode_length=self.episode_length, shader=self.shader, perturbation=self.perturbation)
+                    episode_length=self.episode_length, shader=self.shader, perturbation=self.perturbation,
+                    **({"robot_model": self.robot_model} if self.robot_model else {}))
 
     def create_envs(self, n_envs: int, use_async_envs: bool = False):
         """``{task id: {0: VectorEnv of n_envs RealmLeRobotEnv}}`` (async: one process per env)."""

@@ -79,6 +79,7 @@ def test_report_header_states_protocol_and_error_count(tmp_path):
     for text in ("1 task", "Default, V-AUG", "2 per (task, perturbation) cell", "1234 .. 1235", "60 control steps (4 s at 15 Hz)",
                  "joint_position:position (7 absolute joint targets (rad) + gripper position in [0, 1]", "re-planned every 8 steps", "160x90", "realm-ms 0.1.0 (abc123)", "1 error record"):
         assert text in header, text
+    assert "<dt>robot</dt><dd>nominal</dd>" in header  # records without a robot model ran the nominal robot
     assert "NameNotFound" in page[page.index("id='errors'"):]  # and the errors are listed
 
 

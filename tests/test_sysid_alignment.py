@@ -70,6 +70,10 @@ def test_closed_loop_replay_sees_a_hidden_delay(tmp_path):
     assert nominal.overall.b_sim > 1.2 * nominal.overall.b_real
     assert true.overall.lag_sim == true.overall.lag_real
     assert "LAB" in nominal.table() and nominal.to_dict()["overall"]["episodes"] == 2
+    # a grid over the delay picks the true one: the candidates run as rows of one batch
+    found = dict((c["latency.delay"], r) for c, r in al.align_grid(eps, None, {"latency.delay": [0.0, 0.05, 0.1]}))
+    assert found[0.1].flange_mm < 0.05 < found[0.05].flange_mm < found[0.0].flange_mm
+    assert found[0.0].flange_mm == pytest.approx(nominal.overall.flange_mm, rel=1e-3)
 
 
 def test_bad_episode_files_get_one_clear_error(tmp_path):

@@ -31,6 +31,16 @@ from realm_ms.agents.actuation import ActuationModel
 from realm_ms.agents.effects import Effect, effect_class, make_effect
 
 FORMAT_VERSION = 1
+#: robot models shipped with the package, by name: ``robot_model="droid-aligned"`` anywhere a robot
+#: model is accepted (``gym.make``, ``realm eval --robot-model``, ``realm export``, the LeRobot env type)
+NAMED_MODELS = {"droid-aligned": "droid_aligned.yaml"}
+
+
+def named_model_path(name: str) -> Path:
+    """The package file of a named robot model (``NAMED_MODELS``)."""
+    return Path(__file__).resolve().parent / "assets" / NAMED_MODELS[name]
+
+
 #: the benchmark's policy rate; physics must run a whole number of steps per control step
 CONTROL_HZ = 15
 #: physics rates accepted: 60 Hz (4 steps per control step) to 2 kHz (133); the envs default to
@@ -267,9 +277,12 @@ class RobotModel:
             return cls.from_dict(path_or_dict)
         import yaml
 
+        if isinstance(path_or_dict, str) and path_or_dict in NAMED_MODELS:
+            path_or_dict = named_model_path(path_or_dict)
         path = Path(path_or_dict)
         if not path.is_file():
-            raise FileNotFoundError(f"robot model {path} not found" + (" (it is a directory)" if path.is_dir() else ""))
+            raise FileNotFoundError(f"robot model {path} not found" + (" (it is a directory)" if path.is_dir() else "")
+                                    + f"; give a MODEL.yaml path or a named model ({', '.join(NAMED_MODELS)})")
         try:
             data = yaml.safe_load(path.read_text())
         except UnicodeDecodeError:

@@ -50,6 +50,9 @@ def add_parser(sub) -> None:
     p.add_argument("--action-space", default=None, help="DROID action space the policy acts in: joint_position (default) | joint_velocity | "
                    "cartesian_velocity | cartesian_position, optionally :position or :velocity for the gripper (e.g. joint_velocity:position, "
                    "pi0-FAST-DROID); default: what an openpi server's metadata declares (a RoboArena server's config decides)")
+    p.add_argument("--robot-model", default=None, metavar="NAME|MODEL.yaml",
+                   help="robot the envs run: a named model (droid-aligned) or a MODEL.yaml from `realm sysid fit` "
+                        "(default: the nominal DROID robot)")
     p.add_argument("--device", default="cpu", help="torch device for LeRobot policies")
     p.add_argument("--no-quality", action="store_true", help="skip trajectory-quality metrics (contacts walk per step)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -132,6 +135,7 @@ def run(args) -> int:
 
     check_run_paths(args.out, args.videos)  # before a policy loads or an env is built
     check_policy_spec(args.policy)
+    env_kwargs = robot_model_kwargs(args.robot_model)
     if args.ray_address:
         check_ray_address(args.ray_address)
     os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
@@ -141,6 +145,7 @@ def run(args) -> int:
         camera_size=parse_camera_size(args.camera_size), videos=args.videos, quality=not args.no_quality, progress=not args.no_progress,
         policy_options=dict(openpi_format=args.openpi_format, openpi_wait_s=args.openpi_wait, device=args.device, action_space=args.action_space),
         policy_latency=args.policy_latency,
+        env_kwargs=env_kwargs,
     )
 
 
@@ -154,6 +159,21 @@ def _latency(text: str) -> str:
         return parse_latency(text)
     except ValueError as e:
         raise argparse.ArgumentTypeError(str(e).removeprefix("--policy-latency: ")) from None
+
+
+def robot_model_kwargs(robot_model: str | None, flag: str = "--robot-model") -> dict:
+    """``{"robot_model": ...}`` for a robot model that loads (checked here, before any env is built),
+    ``{}`` for None (the nominal robot)."""
+    from realm_ms.agents.robot_model import load_robot_model
+    from realm_ms.errors import UserError
+
+    if robot_model is None:
+        return {}
+    try:
+        load_robot_model(robot_model)
+    except (ValueError, FileNotFoundError) as e:
+        raise UserError(f"{flag} {robot_model}: {e}") from None
+    return {"robot_model": robot_model}
 
 
 def check_policy_spec(spec: str) -> None:

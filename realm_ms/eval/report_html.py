@@ -140,6 +140,7 @@ def run_protocol(run_dir: Path, records: list[dict]) -> dict[str, str]:
         + (f"; re-planned every {replan[0]} steps" if len(replan) == 1 else ""),
         "camera": _mixed(cams) + (" per camera (the policy's frames and the videos)" if cams else "")
         + (f"; {' / '.join(shaders)} shader" if shaders else ""),
+        "robot": _mixed(_values(records, "robot_model") or ["nominal"]),
         "code version": _mixed(versions),
         "policy latency": describe_latency(records),
     }

@@ -77,8 +77,15 @@ def build_cell_env(task: str, perturbation: str, cfg: RunConfig):
 def _base_record(cfg: RunConfig, key: EpisodeKey) -> dict:
     from realm_ms.agents.droid_action_spaces import action_space_name
 
+    config = cell_config(key.task, key.perturbation, cfg)[0]
     return dict(task=key.task, perturbation=key.perturbation, seed=key.seed, policy=cfg.policy, action_space=action_space_name(cfg.env_kwargs),
-                config=cell_config(key.task, key.perturbation, cfg)[0].to_dict())
+                robot_model=robot_model_name(config.robot_model), config=config.to_dict())
+
+
+def robot_model_name(robot_model) -> str:
+    """What a record calls the robot: ``nominal`` (no model), a named model, a MODEL.yaml path, or
+    ``inline`` (a model given as a dict)."""
+    return "nominal" if robot_model is None else robot_model if isinstance(robot_model, str) else "inline"
 
 
 def unsupported_record(cfg: RunConfig, key: EpisodeKey, why: str) -> dict:

@@ -42,6 +42,8 @@ def add_parser(sub) -> None:
     p.add_argument("--gripper-labels", default="command", choices=GRIPPER_LABELS,
                    help="action[7]: the gripper command as sent (default), or binary (1 wherever the policy closed "
                         "at all: DROID's and REALM's convention, what a policy should learn)")
+    p.add_argument("--robot-model", default=None, metavar="NAME|MODEL.yaml",
+                   help="robot the envs run: a named model (droid-aligned) or a MODEL.yaml (default: the nominal DROID robot)")
     p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes, >= 1 (resume granularity)")
     p.set_defaults(func=run)
 
@@ -64,6 +66,9 @@ def run(args) -> int:
         if args.policy.partition(":")[0] not in policy_names():
             raise UserError(f"unknown policy {args.policy!r}; known: {', '.join(policy_names())}")
         check_policy_spec(args.policy)
+    from realm_ms.eval.cli import robot_model_kwargs
+
+    robot_model = robot_model_kwargs(args.robot_model).get("robot_model")
     tasks = args.tasks or []
     if "all" in tasks and len(tasks) > 1:
         raise UserError("--tasks all stands alone; drop the other task ids")
@@ -76,7 +81,7 @@ def run(args) -> int:
             out=args.out, tasks=tasks, episodes=1 if args.episodes is None else args.episodes, perturbations=args.perturbations, seed=args.seed,
             policy=args.policy, repo_id=args.repo_id, success_only=args.success_only, width=args.width,
             height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=args.commit_every,
-            gripper_labels=args.gripper_labels,
+            gripper_labels=args.gripper_labels, robot_model=robot_model,
         )
         summary = export_eval_run(args.from_eval, cfg) if args.from_eval is not None else export_dataset(cfg)
     except (ExportError, UnknownNameError) as e:

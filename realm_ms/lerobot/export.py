@@ -53,6 +53,7 @@ class ExportConfig:
     # "binary": action[7] = 1 wherever the policy commanded any closing, else 0 (DROID's teleoperated
     # trigger and REALM's binary gripper); "command": the gripper command as sent
     gripper_labels: str = "command"
+    robot_model: str | None = None  # a named robot model or a MODEL.yaml; None = the nominal robot
 
     def __post_init__(self):
         from realm_ms.validate import InputError, check_seed
@@ -339,7 +340,8 @@ def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]
         for cell in cells:
             if cell.want == 0 or not cell.jobs:
                 continue
-            env_config, rest = rollout_config(cell.task, cfg.width, cfg.height, None, cfg.shader, perturbation=cell.perturbation)
+            env_config, rest = rollout_config(cell.task, cfg.width, cfg.height, None, cfg.shader, perturbation=cell.perturbation,
+                                              **({"robot_model": cfg.robot_model} if cfg.robot_model else {}))
             env = make_env(env_config, **rest)
             policies: dict[str, object] = {}
             want = cell.want

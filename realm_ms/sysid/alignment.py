@@ -210,6 +210,40 @@ def replay_closed_loop(episodes: list[DroidEpisode], model=None, sim=None) -> li
     return [out[i, : e.steps * sub : sub] for i, e in enumerate(episodes)]
 
 
+def align_grid(episodes: list[DroidEpisode], model, grid: dict[str, list[float]]) -> list[tuple[dict[str, float], LabAlignment]]:
+    """Every combination of the ``grid`` values (``{"target_filter.tau": [0.06, 0.08], ...}``, keys
+    ``effect.param``, per-joint names set all joints) on top of ``model``, each replayed on every
+    episode in one batch (a row per episode and candidate): ``[(values, overall row), ...]``."""
+    import itertools
+
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.agents.robot_model import load_robot_model
+
+    base = load_robot_model(model).copy()
+    keys = list(grid)
+    combos = [dict(zip(keys, c)) for c in itertools.product(*(grid[k] for k in keys))]
+    for name in dict.fromkeys(k.split(".")[0] for k in keys):
+        if base.effect(name) is None:
+            base.effects.append(make_effect(name))
+    rows_per = len(episodes)
+    for fx in base.effects:
+        theta = []
+        for c in combos:
+            fx_c = make_effect(fx.name, fx.values(), fx.config_dict())
+            fx_c.set_values({k.split(".")[1]: v for k, v in c.items() if k.split(".")[0] == fx.name})
+            theta += [fx_c.theta[0].numpy()] * rows_per
+        fx.set_theta(np.stack(theta))
+    sims = replay_closed_loop(episodes * len(combos), base)
+    from realm_ms.agents.droid_action_spaces import DroidIK
+
+    ik = DroidIK()
+    out = []
+    for i, c in enumerate(combos):
+        rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims[i * rows_per:(i + 1) * rows_per])]
+        out.append((c, summarize("all", rows)))
+    return out
+
+
 def align(episodes: list[DroidEpisode], model=None, model_name: str | None = None) -> AlignmentResult:
     """Replay ``episodes`` closed loop under ``model`` and tabulate the metrics per episode and lab."""
     import time
