@@ -36,6 +36,22 @@ def test_bad_data_is_refused_with_a_clear_message(kw, msg):
         validate(traj(**kw), LIMITS)
 
 
+def test_measured_joints_a_little_past_the_limits_warn_far_past_are_refused():
+    """A real arm reads a little past the URDF's limits (DROID: joint 6 at 3.82 against 3.7525): a
+    warning naming the joint; far past them (wrong joint order) an error."""
+    from realm_ms.sysid.timeseries import DataWarning
+
+    hi6 = LIMITS[5, 1]
+    q = np.repeat(HOME[None], 60, 0)
+    q[10:20, 5] = hi6 + 0.07
+    with pytest.warns(DataWarning, match=r"joint 6 = .* past the model's joint limits .*17%"):
+        out = validate(traj(q=q, q_cmd=np.repeat(HOME[None], 60, 0)), LIMITS)
+    assert np.array_equal(out.q, q)
+    q[10:20, 5] = hi6 + 0.3
+    with pytest.raises(DataError, match="measured joint 6 .* by more than 0.25 rad"):
+        validate(traj(q=q, q_cmd=np.repeat(HOME[None], 60, 0)), LIMITS)
+
+
 def test_too_few_samples():
     with pytest.raises(DataError, match="only 10 samples"):
         validate(traj(n=10), LIMITS)
