@@ -65,13 +65,14 @@ class ChunkedPolicy:
             images={c: obs["sensor_data"][c]["rgb"][:1].detach().cpu().numpy() for c in self.cameras},
             slots=[0],
         )
-        out = self.policy.act(batch)
-        if out.errors and out.errors[0]:
-            raise PolicyError(out.errors[0])
-        chunk = np.asarray(out.actions[0][: self.replan_every], dtype=np.float32)
-        if len(chunk) == 0:
-            raise PolicyError(f"{self.policy.name} returned no actions")
-        return chunk
+        from realm_ms.eval.policies.replies import check_output
+
+        # the same reply checks as `realm eval` (shape, numbers, finite, within the space's bounds);
+        # export's envs act in joint_position
+        actions, errors = check_output(self.policy.act(batch), 1, None, self.policy.name)
+        if errors:
+            raise PolicyError(errors[0])
+        return actions[0][: self.replan_every]
 
 
 def make_export_policy(spec: str, env, replan_every: int = 8):
