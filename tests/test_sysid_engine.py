@@ -1,6 +1,7 @@
 """Evaluator: chunking and worker processes give the same numbers as one in-process simulator."""
 
 import numpy as np
+import pytest
 
 from realm_ms.agents.effects import make_effect
 from realm_ms.sysid.engine import Evaluator, RolloutCache, arm_keys, plan_chunks
@@ -78,8 +79,8 @@ def test_a_mixed_batch_in_chunks_matches_one_chunk():
     np.testing.assert_allclose(chunked[3], bare[3], atol=1e-5)
 
 
+@pytest.mark.slow
 def test_worker_processes_match_in_process():
-    """Worker processes are the CLI's default (``--workers`` = min(2, cores)): same rollouts as in-process."""
     q0, cmd = _batch(8)
     fx = make_effect("armature")
     th = np.tile(np.linspace(0, 0.4, 8)[:, None], (1, 7))
