@@ -273,13 +273,13 @@ def write_workbench_npz(episodes: list[DroidEpisode], out_dir: str | Path) -> li
     """One ``realm sysid`` npz per episode (``t``, ``q``, ``q_cmd`` from ``rebuilt_joint_targets``,
     ``gripper``, ``control_hz``)."""
     from realm_ms.agents.droid_action_spaces import DroidIK
+    from realm_ms.sysid.data_io import write_npz
+    from realm_ms.sysid.timeseries import Trajectory
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     ik, paths = DroidIK(), []
     for ep in episodes:
-        p = out / f"{ep.name}.npz"
-        np.savez(p, t=np.arange(ep.steps) / ep.control_hz, q=ep.q, q_cmd=rebuilt_joint_targets(ep, ik),
-                 gripper=ep.gripper, control_hz=ep.control_hz)
+        p = Path(out_dir) / f"{ep.name}.npz"
+        write_npz(p, Trajectory(ep.name, np.arange(ep.steps) / ep.control_hz, ep.q, rebuilt_joint_targets(ep, ik),
+                                gripper=ep.gripper, control_hz=ep.control_hz))
         paths.append(p)
     return paths
