@@ -3,7 +3,7 @@ raster cameras at 320x180, next to ManiSkill's PickCube-v1 in the same scheme, i
 
 Scheme: N spawned worker processes, each stepping one CPU-physics env with rendering; the main
 process sends an 8-action chunk per round and gets the observation back (REALM: through shared
-memory via ``realm_ms.eval.workers.ProcessBackend``; PickCube: the same loop over a pipe, its one
+memory via ``realm_ms.eval.backends.processes.ProcessBackend``; PickCube: the same loop over a pipe, its one
 camera set to 320x180 and the same shader). Both capture images only at a chunk's last step, the
 one the policy sees. Measured in steady state: a warm-up round per worker
 (spawn, imports, env build) is excluded. Efficiency = steps/s(N) / (N * steps/s(1)).
@@ -101,7 +101,7 @@ def bench_realm(n: int, seconds: float, task: str, width: int, height: int) -> f
     from realm_ms.eval.policies.policy import PolicyInput
     from realm_ms.eval.protocol import EpisodeKey
     from realm_ms.eval.runner import RunConfig
-    from realm_ms.eval.workers import ProcessBackend
+    from realm_ms.eval.backends.processes import ProcessBackend
 
     policy = make_policy("zero")
     cfg = RunConfig(policy="zero", max_steps=10**6, obs=ObsRequest(("exterior_1", "exterior_2", "wrist"), width, height), quality=False)

@@ -110,7 +110,7 @@ def main(argv=None) -> int:
 
     import realm_ms  # noqa: F401
     from realm_ms.errors import UserError
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.protocol import PRESETS, available_perturbations, canonical_perturbation
     from realm_ms.eval.records import latest_by_key, read_records
     from realm_ms.tasks import TASKS

@@ -61,7 +61,7 @@ def serve_rate(protocol: str, addresses: list[str], sequential: bool, slots: int
 
 
 def env_rate(protocol: str, addresses: list[str], sequential: bool, task: str, slots: int, max_steps: int, replan: int) -> float:
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.protocol import PRESETS
     from realm_ms.eval.records import read_records
 

@@ -36,7 +36,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from realm_ms.errors import UserError
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.policies.lerobot import make_tiny_policy
     from realm_ms.eval.protocol import PRESETS, available_perturbations, canonical_perturbation
     from realm_ms.eval.report import write_index, write_report

@@ -13,7 +13,7 @@ TASK, PERTURBATION, SEED, STEPS = "REALM-PickApple-v1", "VB-POSE", 3, 40
 
 @pytest.fixture(scope="module")
 def record(tmp_path_factory):
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.protocol import PRESETS
 
     run = tmp_path_factory.mktemp("run")

@@ -14,7 +14,8 @@ import pytest
 import torch
 
 from realm_ms.cli import main
-from realm_ms.eval.batched import BatchedBackend
+from realm_ms.eval.backends.batched import BatchedBackend
+from realm_ms.eval.backends.inline import InlineBackend
 from realm_ms.eval.policies.baselines import ZeroPolicy
 from realm_ms.eval.policies.policy import ObsRequest
 from realm_ms.eval.protocol import EpisodeKey, plan
@@ -82,13 +83,13 @@ def test_batched_cpu_hands_the_observation_batch_to_the_policy(tmp_path):
 
 
 def test_backend_choice(monkeypatch):
-    import realm_ms.eval.workers as w
+    import realm_ms.eval.backends.choose as w
 
     cfg = RunConfig()
     monkeypatch.setattr(w, "gpu_physx_status", lambda: (False, "no CUDA device is visible"))
     be = w.choose_backend("batched", cfg, 3)
     assert isinstance(be, BatchedBackend) and be.n_slots == 3 and be.cfg.env_kwargs["sim_backend"] == "physx_cpu"
-    assert isinstance(w.choose_backend("auto", cfg, 1), w.InlineBackend)
+    assert isinstance(w.choose_backend("auto", cfg, 1), InlineBackend)
     with pytest.raises(RuntimeError, match="--backend gpu: no CUDA device"):
         w.choose_backend("gpu", cfg, 4)
     monkeypatch.setattr(w, "gpu_physx_status", lambda: (True, "ok"))
@@ -263,7 +264,6 @@ def test_one_slot_runner_and_sub_env_slots_give_the_same_records():
     """``EpisodeRunner`` (the engine's one-slot case) and three sub-envs of one batched env run the
     same keys to the same records (but for wall time and the env config's ``num_envs``)."""
     from realm_ms.eval.slots import EpisodeRunner
-    from realm_ms.eval.workers import InlineBackend
 
     cfg = RunConfig(policy="zero", max_steps=8, replan_every=3, success_tail=TAIL, quality=False, obs=ObsRequest(cameras=("wrist",), width=4, height=2))
 
@@ -324,7 +324,7 @@ def test_policy_errors_fail_their_slot_and_unsupported_cells_are_recorded():
 def test_gpu_probe_reports_a_missing_physx_library_without_fetching_it(monkeypatch, tmp_path):
     import sapien
 
-    import realm_ms.eval.workers as w
+    import realm_ms.eval.backends.choose as w
 
     def no_fetch(*a, **k):
         raise AssertionError("the probe must not start SAPIEN's download")
@@ -336,4 +336,4 @@ def test_gpu_probe_reports_a_missing_physx_library_without_fetching_it(monkeypat
     assert not ok and "not installed" in why and "sapien.physx.enable_gpu()" in why
     with pytest.raises(RuntimeError, match="--backend gpu: SAPIEN's GPU PhysX library is not installed"):
         w.choose_backend("gpu", RunConfig(), 2)
-    assert isinstance(w.choose_backend("auto", RunConfig(), 1), w.InlineBackend)
+    assert isinstance(w.choose_backend("auto", RunConfig(), 1), InlineBackend)

@@ -79,7 +79,7 @@ def test_bad_flags_are_one_line_errors(tmp_path, capsys):
     assert main(["eval", "--policy", "zero", "--tasks", TASKS[0], "--perturbations", "NOPE", "--out", str(tmp_path / "x")]) == 2
     assert main(["eval", "--policy", "lerobot:/does/not/exist", "--tasks", TASKS[0], "--out", str(tmp_path / "x")]) == 2
     assert main(["eval", "report", str(tmp_path / "empty")]) == 2
-    from realm_ms.eval.workers import gpu_physx_status
+    from realm_ms.eval.backends.choose import gpu_physx_status
 
     if not gpu_physx_status()[0]:  # no SAPIEN GPU PhysX here: --backend gpu must say so in one line
         assert main(["eval", "--policy", "zero", "--tasks", TASKS[0], "--perturbations", "Default", "--backend", "gpu",

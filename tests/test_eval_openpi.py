@@ -200,7 +200,7 @@ def test_server_metadata_declares_the_action_space():
 def test_velocity_chunks_from_a_server_drive_an_episode_to_success(tmp_path):
     """A stand-in server answers the scripted expert's recorded joint velocities, 8 per request;
     ``realm eval`` in joint_velocity space (declared by the server) replays them to success."""
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.policies.openpi_server import ReplayInfer, expert_actions
     from realm_ms.eval.protocol import PRESETS
     from realm_ms.eval.records import read_records

@@ -53,7 +53,7 @@ class _Reach:
 
 
 def _run(tmp_path, name, sleep, latency):
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.protocol import PRESETS
     from realm_ms.eval.records import read_records
 
@@ -82,7 +82,7 @@ def test_a_fixed_latency_and_the_same_latency_measured_give_the_same_records(tmp
     # time stopping during inference is another robot: more chunks fit in the episode and the arm moves further
     assert n_none == 4 and none["quality"]["joint_path_length"] > fixed["quality"]["joint_path_length"] * 1.2
     # another latency is another run: the same --out refuses it instead of mixing records
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.protocol import PRESETS
 
     with RoboArenaServer(_Reach(0.0), dict(needs_wrist_camera=False, n_external_cameras=0)) as srv:

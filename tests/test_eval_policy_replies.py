@@ -206,7 +206,7 @@ class _Raises(Policy):
 def test_an_in_process_policys_bad_output_is_an_error_record_and_the_run_goes_on(policy, want):
     from realm_ms.eval.protocol import EpisodeKey
     from realm_ms.eval.runner import RunConfig, run_plan
-    from realm_ms.eval.workers import InlineBackend
+    from realm_ms.eval.backends.inline import InlineBackend
 
     cfg = RunConfig(policy=policy.name, max_steps=8, replan_every=4, quality=False)
     be = InlineBackend(cfg, 1)
@@ -243,7 +243,7 @@ class _NotAnOutput(Policy):
 def test_a_policy_returning_a_bare_array_fails_its_episodes_not_the_run():
     from realm_ms.eval.protocol import EpisodeKey
     from realm_ms.eval.runner import RunConfig, run_plan
-    from realm_ms.eval.workers import InlineBackend
+    from realm_ms.eval.backends.inline import InlineBackend
 
     be = InlineBackend(RunConfig(policy="bare-array", max_steps=4, replan_every=2, quality=False), 1)
     recs = []

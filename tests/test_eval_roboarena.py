@@ -155,7 +155,7 @@ def _expert_actions(space: str) -> np.ndarray:
 def test_the_experts_chunks_drive_an_episode_to_success(space, tmp_path):
     """A stand-in RoboArena server answers the scripted expert's recorded actions, 8 per request, in
     the action space its config declares; ``realm eval`` replays them to success."""
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.protocol import PRESETS
     from realm_ms.eval.records import read_records
 
@@ -172,7 +172,7 @@ def test_the_experts_chunks_drive_an_episode_to_success(space, tmp_path):
 
 
 def test_a_failing_server_becomes_an_error_record_and_the_run_goes_on(tmp_path):
-    from realm_ms.eval.cli import evaluate
+    from realm_ms.eval import evaluate
     from realm_ms.eval.protocol import PRESETS
     from realm_ms.eval.records import read_records
 

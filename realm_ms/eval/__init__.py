@@ -1,14 +1,28 @@
 """Policy evaluation under the REALM protocol: ``realm eval``, metrics, reports, real-vs-sim validation.
 
+``from realm_ms.eval import evaluate``: a whole ``realm eval`` run from Python (``evaluate.py``).
+
 Layout (one concept per module):
 
 - ``policies/``: the policy interface and registry (expert, zero, random, lerobot, openpi);
 - ``protocol.py``: presets (``realm``, ``quick``) and the episode plan ((task, perturbation, seed) keys);
 - ``slots.py``: a cell's env on the episode engine (``tasks.episode``), ``EpisodeRunner`` its one-slot case;
-- ``runner.py``: run settings, the record schema and the driver that batches the policy over slots;
-- ``workers.py``: execution backends (in-process, N CPU worker processes with shared-memory
-  observations, ManiSkill GPU simulation where SAPIEN's GPU PhysX exists, Ray sharding);
+- ``runner.py``: run settings, a cell's env config, the record schema and the driver (``run_plan``)
+  that batches the policy over slots; ``realm export`` runs its episodes through it too;
+- ``backends/``: where slots live (``base.py``: the protocol; ``inline.py``, ``processes.py`` with its
+  shared-memory wire format, ``batched.py`` for GPU simulation, ``ray.py``; ``choose.py``: the GPU
+  probe and ``--backend``);
+- ``evaluate.py``: ``evaluate()``, a whole run (run directory, resume, backend, metrics);
 - ``records.py``: append-only JSONL records, resume; ``quality.py``: trajectory quality;
 - ``metrics.py``: success / progression with intervals, failure stages; ``validate.py``: Pearson,
   MMRV, RMSD; ``report.py``: HTML report; ``cli.py``: ``realm eval``.
 """
+
+
+def __getattr__(name: str):
+    # imported on first use: ``import realm_ms.eval.<module>`` stays free of the run machinery
+    if name == "evaluate":
+        from realm_ms.eval.evaluate import evaluate
+
+        return evaluate
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

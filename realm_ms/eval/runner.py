@@ -5,8 +5,8 @@ and build the env of a (task, perturbation) cell through ``tasks.make_env``; ``e
 the one record schema every backend writes (the episodes themselves run on the episode engine,
 ``tasks.episode``, through ``slots.CellSlots``: ``EpisodeRunner`` is its one-slot case).
 
-``run_plan`` is the driver: it keeps every slot of a backend busy (``workers.py``: in-process, N
-worker processes, Ray; ``batched.py``), calls the policy once per round on the batch of slots that
+``run_plan`` is the driver: it keeps every slot of a backend busy (``backends/``: in-process, N
+worker processes, batched sub-envs; Ray shards run it per cell), calls the policy once per round on the batch of slots that
 need actions, appends each finished record atomically, and shows a live progress bar.
 """
 
@@ -93,6 +93,15 @@ def unsupported_record(cfg: RunConfig, key: EpisodeKey, why: str) -> dict:
     return _base_record(cfg, key) | dict(status="unsupported", error=why, success=False, progression=0.0, steps=0)
 
 
+def error_record(cfg: RunConfig, key: EpisodeKey | None, why: str, traceback: str | None = None) -> dict:
+    """The record of an episode that failed before it could finish (its worker process died or
+    raised): the same schema, ``status`` "error"; ``traceback``: the worker's, cut to its last 4000 characters."""
+    rec = (_base_record(cfg, key) if key is not None else {}) | dict(status="error", error=why, success=False, progression=0.0, steps=0)
+    if traceback:
+        rec["traceback"] = traceback[-4000:]
+    return rec
+
+
 def episode_record(cfg: RunConfig, ep, status: str, skill, success: bool, stalled: str, error: str | None = None) -> dict:
     """One finished episode's record, the schema every backend writes. ``ep``: a ``slots.SlotEpisode``
     (the engine's bookkeeping with its key, quality and frames); its frames are written to a video
@@ -167,6 +176,7 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
     records state the latency setting and the latencies measured per server."""
     from tqdm import tqdm
 
+    from realm_ms.eval.backends.base import Failed, Unsupported
     from realm_ms.eval.latency import hold_steps, parse_latency
     from realm_ms.eval.policies.replies import check_output
 
@@ -182,7 +192,8 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
         return dict(success=f"{prog.successes}/{prog.done}", errors=prog.errors, steps_s=f"{prog.steps_per_s():.1f}")
 
     def count_steps(slot: int, steps: int) -> None:
-        prev = pending.get(slot, {}).get("steps", 0) or 0
+        obs = pending.get(slot)
+        prev = obs.get("steps", 0) or 0 if isinstance(obs, dict) else 0
         prog.env_steps += max(0, int(steps or 0) - prev)
 
     def finish(slot: int, rec: dict) -> None:
@@ -209,8 +220,8 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
             starts = backend.assign([s for s in range(backend.n_slots) if s not in active], queue) if queue else {}
             if starts:
                 for slot, obs in backend.start(starts).items():
-                    if "failed_record" in obs:  # the worker could not even reset: that episode fails
-                        finish(slot, obs["failed_record"])
+                    if isinstance(obs, Failed):  # the worker could not even reset: that episode fails
+                        finish(slot, obs.record)
                         continue
                     active[slot] = starts[slot]
                     pending[slot] = obs
@@ -219,7 +230,7 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
             commands: dict[int, np.ndarray | None] = {}
             aborts: dict[int, str] = {}
             delays: dict[int, int] = {}
-            ready = sorted(s for s in active if "unsupported" not in pending[s])
+            ready = sorted(s for s in active if not isinstance(pending[s], Unsupported))
             if policy.env_side or not ready:
                 commands = {s: None for s in active}
                 if policy.env_side and policy_latency != "0":  # a privileged policy thinks in no time: measured = 0

@@ -3,8 +3,8 @@
 ``CellSlots`` holds the env of one cell with ``num_envs`` sub-envs, each an episode slot, and runs
 them through ``tasks.episode.EpisodeEngine`` (resets, chunks, per-slot stopping rules, sparse
 capture). On top of the engine it adds what an eval record needs: the cell's env (built through
-``build_cell_env``, rebuilt when the cell changes, "unsupported" when the perturbation does not
-apply), the env-side policy (the scripted expert), trajectory quality and video frames per slot,
+``build_cell_env``, rebuilt when the cell changes, the ``Unsupported`` signal when the perturbation
+does not apply), the env-side policy (the scripted expert), trajectory quality and video frames per slot,
 and the record of each finished episode. Observations come back as one host copy of the batched
 tensors per call, each slot's observation a row view of it.
 
@@ -104,7 +104,9 @@ class CellSlots:
         eps = {s: SlotEpisode(key=k, seed=k.seed, max_steps=self.cfg.max_steps, unsupported=self.unsupported) for s, k in keys.items()}
         self.eps.update(eps)
         if self.unsupported:
-            return {s: {"unsupported": self.unsupported} for s in keys}
+            from realm_ms.eval.backends.base import Unsupported
+
+            return {s: Unsupported(self.unsupported) for s in keys}
         obs, _ = self.engine.reset({s - self.first: ep for s, ep in eps.items()})
         if self.cfg.env_side and self.engine.actor is None:  # built on the env after its first reset
             from realm_ms.eval.policies import make_policy

@@ -1,4 +1,4 @@
-"""Batched simulation backend: each sub-env of a ManiSkill env with ``num_envs = N`` is an episode slot.
+"""Batched backend (ManiSkill GPU simulation): each sub-env of a ManiSkill env with ``num_envs = N`` is an episode slot.
 
 ``BatchedBackend`` holds G groups, each a ``slots.CellSlots``: one env of N sub-envs stepped
 together on the episode engine (``tasks.episode``), the same code that runs ``EpisodeRunner`` (its
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from realm_ms.eval.backend import Backend
+from realm_ms.eval.backends.base import Backend
 from realm_ms.eval.policies.policy import PolicyInput
 from realm_ms.eval.protocol import EpisodeKey
 from realm_ms.eval.runner import RunConfig, build_cell_env
