@@ -172,3 +172,92 @@ def test_binary_gripper_labels_keep_the_episode_and_binarise_the_grasp(tmp_path,
     assert main(["export", "--tasks", TASKS[0], "--episodes", "1", "--seed", "3", "--width", "32", "--height", "24",
                  "--out", str(tmp_path / "binary"), "--repo-id", "realm/binary"]) == 2
     assert "--gripper-labels binary" in capsys.readouterr().err
+
+
+def test_several_workers_write_the_episodes_one_worker_writes(exported, tmp_path):
+    """`realm export --workers 2` runs on `realm eval`'s process backend: the frames come back with
+    each record and land in the dataset as the in-process export writes them."""
+    from realm_ms.cli import main
+    from realm_ms.lerobot.export import read_sidecar
+
+    cfg, _ = exported
+    out = tmp_path / "two_workers"
+    assert main(["export", "--tasks", TASKS[0], "--episodes", str(EPISODES), "--seed", "3", "--width", str(W), "--height", str(H),
+                 "--max-steps", str(STEPS), "--workers", "2", "--no-progress", "--out", str(out), "--repo-id", cfg.repo_id]) == 0
+    mine = sorted(read_sidecar(out), key=lambda r: r["seed"])
+    theirs = sorted((r for r in read_sidecar(cfg.out) if r["task"] == TASKS[0]), key=lambda r: r["seed"])
+    strip = ("episode_index",)  # the order two workers finish in is free
+    assert [{k: v for k, v in r.items() if k not in strip} for r in mine] == [{k: v for k, v in r.items() if k not in strip} for r in theirs]
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    def by_seed(root, side):
+        data = LeRobotDataset(cfg.repo_id, root=root, video_backend="pyav").hf_dataset.with_format("numpy")
+        index = np.asarray(data["episode_index"])
+        return {r["seed"]: (np.stack(data["observation.state"])[index == r["episode_index"]],
+                            np.stack(data["action"])[index == r["episode_index"]]) for r in side}
+
+    a, b = by_seed(out, mine), by_seed(cfg.out, theirs)
+    for seed in a:
+        np.testing.assert_array_equal(a[seed][0], b[seed][0])
+        np.testing.assert_array_equal(a[seed][1], b[seed][1])
+
+
+def test_a_bad_policy_reply_fails_its_episode_and_nothing_is_written(tmp_path, monkeypatch, capsys):
+    """A reply `realm eval` would reject (NaN) fails the episode through the same checks; the export
+    writes nothing for it, says so, and exits 1 (a rerun retries it)."""
+    import realm_ms.eval.policies as policies
+    from realm_ms.cli import main
+    from realm_ms.eval.policies.policy import ObsRequest, PolicyOutput
+    from realm_ms.lerobot.export import read_sidecar
+
+    class NaNPolicy:
+        name, env_side = "nan", False
+
+        def spec(self):
+            return "nan"
+
+        def obs_request(self):
+            return ObsRequest()
+
+        def reset(self, slots):
+            pass
+
+        def act(self, batch):
+            return PolicyOutput(np.full((len(batch.state), 4, 8), np.nan, np.float32))
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(policies, "make_policy", lambda spec, **kw: NaNPolicy())
+    out = tmp_path / "nan"
+    assert main(["export", "--policy", "zero", "--tasks", TASKS[0], "--episodes", "1", "--width", "32", "--height", "24",
+                 "--max-steps", "4", "--no-progress", "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert f"{TASKS[0]} Default seed 0: error:" in captured.out and "NaN" in captured.out
+    assert "1 episode(s) ended in an error" in captured.err
+    assert read_sidecar(out) == []
+
+
+def test_plans_skip_tried_keys_and_replay_recorded_draws():
+    """Export's plans are `realm eval` episode keys: tried (key, policy) pairs are skipped, a cell
+    with its episodes gets none, and records of a run become keys grouped per policy with their draws."""
+    from realm_ms.eval.protocol import EpisodeKey
+    from realm_ms.lerobot.export import ExportConfig, plan, plan_from_records
+
+    cfg = ExportConfig(out="/tmp/unused_plan_out", tasks=["REALM-PickApple-v1", "REALM-PushSwitch-v1"], episodes=2, seed=5)
+    done = [dict(task="REALM-PickApple-v1", perturbation="Default", seed=5, policy="expert", kept=True),
+            dict(task="REALM-PickApple-v1", perturbation="Default", seed=6, policy="expert", kept=True),
+            dict(task="REALM-PushSwitch-v1", perturbation="Default", seed=5, policy="expert", kept=False)]
+    (p,) = plan(cfg, done)
+    assert p.keys == [EpisodeKey("REALM-PushSwitch-v1", "Default", 6)]
+    assert p.want == {("REALM-PickApple-v1", "Default"): 0, ("REALM-PushSwitch-v1", "Default"): 2}
+    draws = [{"V-AUG": {"sigma": 0.5}}]
+    records = [dict(task="B", perturbation="V-AUG", seed=1, policy="expert", perturbation_params={"params": draws}, max_steps=30),
+               dict(task="A", perturbation="Default", seed=1, policy="zero", replan_every=4, max_steps=30),
+               dict(task="A", perturbation="V-AUG", seed=2, policy="expert", status="error"),
+               dict(task="A", perturbation="Default", seed=2, policy="expert", max_steps=30),
+               dict(task="B", perturbation="V-AUG", seed=3, policy="expert", max_steps=30)]
+    plans = plan_from_records(records, done=[dict(task="B", perturbation="V-AUG", seed=3, policy="expert", kept=True)], max_steps=9)
+    assert [(q.policy, q.replan_every, q.max_steps) for q in plans] == [("expert", 8, 9), ("zero", 4, 9)]
+    assert plans[0].keys == [EpisodeKey("B", "V-AUG", 1), EpisodeKey("A", "Default", 2)] and plans[0].want is None
+    assert plans[0].replay == {EpisodeKey("B", "V-AUG", 1): draws} and plans[1].keys == [EpisodeKey("A", "Default", 1)]

@@ -65,9 +65,8 @@ def available_perturbations() -> list[str]:
 
 
 def canonical_perturbation(name: str) -> str:
-    """Registered spelling of a perturbation name or alias (e.g. a numeric id); raises ``ValueError``."""
-    if name == DEFAULT or name.lower() == "default" or name == "0":
-        return DEFAULT
+    """Registered spelling of a perturbation name or alias (a numeric id; any case: "default" and "0"
+    are ``DEFAULT``); raises ``ValueError`` (``UnknownNameError``, listing the known names)."""
     from realm_ms.perturbations import PERTURBATIONS
 
     return PERTURBATIONS.canonical(name)

@@ -15,8 +15,10 @@ from __future__ import annotations
 import os
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -26,6 +28,26 @@ from realm_ms.eval.provenance import code_version
 from realm_ms.jsonable import jsonable
 
 VIDEO_CAMERAS = ("exterior_1", "wrist")
+HOOKED = "hooked"  # the record field that carries what an ``EpisodeHook`` made of the episode
+
+
+class EpisodeHook(Protocol):
+    """Per-step data an episode's record carries beyond ``realm eval``'s fields (``realm export``:
+    its dataset frames). It runs where the env steps (a worker process too: it must pickle); what
+    ``finish`` returns rides in ``record[HOOKED]`` to ``run_plan``'s ``on_record``."""
+
+    def reset_options(self, key: EpisodeKey) -> dict | None:
+        """``env.reset`` options of the key's episode (e.g. recorded perturbation draws to replay)."""
+
+    def observe(self, obs: dict, row: int) -> Any:
+        """Before a step: what to keep of sub-env ``row``'s observation its action is chosen from."""
+
+    def frame(self, seen: Any, action: np.ndarray, ep) -> Any:
+        """After the step: one frame from ``observe``'s result, the action applied and the episode
+        (``tasks.episode.Episode``: progression, success, done, instruction as of this step)."""
+
+    def finish(self, ep, frames: list) -> Any:
+        """The episode's frames (and anything else of the episode) as they ride with its record."""
 
 
 @dataclass
@@ -34,7 +56,7 @@ class RunConfig:
 
     policy: str = "zero"  # policy spec (recorded; env-side policies are rebuilt from it)
     env_side: bool = False
-    max_steps: int = 800
+    max_steps: int | None = 800  # control steps per episode; None: the task's horizon
     replan_every: int = 8
     success_tail: int = 15
     obs: ObsRequest = field(default_factory=ObsRequest)
@@ -43,9 +65,15 @@ class RunConfig:
     quality: bool = True
     env_kwargs: dict = field(default_factory=dict)
     policy_latency: str = "0"  # "0" | "measured" | seconds (``latency.py``): the hold before each chunk
+    shader: str = "default"  # camera shader (``rendering.SHADERS``)
+    hook: EpisodeHook | None = None  # per-step frames a record carries (``realm export``)
 
     def needs_rgb(self) -> bool:
-        return bool(self.obs.cameras) or self.videos != "none"
+        return bool(self.obs.cameras) or self.videos != "none" or self.hook is not None
+
+    def every_frame(self) -> bool:
+        """Capture cameras at every step (videos, dataset frames), not only where a policy looks."""
+        return self.videos != "none" or self.hook is not None
 
 
 def cell_config(task: str, perturbation: str, cfg: RunConfig):
@@ -56,12 +84,14 @@ def cell_config(task: str, perturbation: str, cfg: RunConfig):
     kw = dict(
         obs_mode="rgb" if cfg.needs_rgb() else "state_dict",
         control_mode="droid_joint_pos",
-        max_episode_steps=cfg.max_steps,
         success_tail=cfg.success_tail,
         camera_width=cfg.obs.width,
         camera_height=cfg.obs.height,
+        shader=cfg.shader,
         perturbation=None if perturbation == DEFAULT else perturbation,
     )
+    if cfg.max_steps is not None:
+        kw["max_episode_steps"] = cfg.max_steps
     return RealmEnvConfig.from_gym_kwargs(task, kw | cfg.env_kwargs)
 
 
@@ -117,7 +147,7 @@ def episode_record(cfg: RunConfig, ep, status: str, skill, success: bool, stalle
         stages=ep.latched,
         stalled_stage=stalled,
         steps=ep.steps,
-        max_steps=cfg.max_steps,
+        max_steps=ep.max_steps,
         replan_every=cfg.replan_every,
         wall_s=round(ep.wall_s(), 3),
         quality=ep.quality.summary() if ep.quality is not None else None,
@@ -164,8 +194,11 @@ class Progress:
 
 
 def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: bool = True, replan_every: int = 8,
-             policy_latency: str = "0", env_kwargs: dict | None = None) -> Progress:
+             policy_latency: str = "0", env_kwargs: dict | None = None, skip: Callable[[EpisodeKey], bool] | None = None,
+             desc: str = "episodes") -> Progress:
     """Run ``keys`` on ``backend`` with ``policy``; ``on_record(record)`` is called per finished episode.
+    ``skip(key)``: asked before a key starts; True drops it (``realm export --success-only``: its
+    cell has its episodes).
 
     One round: free slots start the next keys (``backend.assign``: preferring a slot's current
     (task, perturbation), so envs are reused), the policy acts once on the batch of slots that need
@@ -184,7 +217,7 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
     measured: dict[int, dict[str, list[float]]] = {}  # slot -> server -> request wall times (s)
     queue = list(keys)
     prog = Progress(total=len(keys))
-    bar = tqdm(total=len(keys), desc="episodes", unit="ep", disable=not progress_bar, dynamic_ncols=True)
+    bar = tqdm(total=len(keys), desc=desc, unit="ep", disable=not progress_bar, dynamic_ncols=True)
     active: dict[int, EpisodeKey] = {}
     pending: dict[int, dict] = {}  # slot -> latest observation
 
@@ -217,6 +250,12 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
 
     try:
         while queue or active:
+            if skip is not None and queue:
+                kept = [k for k in queue if not skip(k)]
+                if len(kept) < len(queue):
+                    prog.total -= len(queue) - len(kept)
+                    bar.total, queue[:] = prog.total, kept
+                    bar.refresh()
             starts = backend.assign([s for s in range(backend.n_slots) if s not in active], queue) if queue else {}
             if starts:
                 for slot, obs in backend.start(starts).items():
@@ -277,4 +316,4 @@ def default_workers() -> int:
     return max(1, min(os.cpu_count() or 1, 16))
 
 
-__all__ = ["RunConfig", "run_plan", "build_cell_env", "cell_config", "Progress", "default_workers"]
+__all__ = ["RunConfig", "EpisodeHook", "HOOKED", "error_record", "run_plan", "build_cell_env", "cell_config", "Progress", "default_workers"]

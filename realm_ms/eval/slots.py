@@ -19,18 +19,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.eval.protocol import DEFAULT, EpisodeKey
-from realm_ms.eval.runner import VIDEO_CAMERAS, RunConfig, build_cell_env, episode_record, unsupported_record
+from realm_ms.eval.runner import HOOKED, VIDEO_CAMERAS, RunConfig, build_cell_env, episode_record, unsupported_record
 from realm_ms.tasks.episode import Episode, EpisodeEngine, Step
 
 
 @dataclass(kw_only=True)
 class SlotEpisode(Episode):
-    """An engine episode with what its eval record adds: the key, trajectory quality, video frames."""
+    """An engine episode with what its eval record adds: the key, trajectory quality, video frames,
+    the frames of the run's ``EpisodeHook``."""
 
     key: EpisodeKey
     unsupported: str | None = None
     quality: object = None
     frames: list[np.ndarray] = field(default_factory=list)
+    hooked: list = field(default_factory=list)
 
     @property
     def perturbation_info(self) -> dict:
@@ -76,6 +78,7 @@ class CellSlots:
         self.env, self.engine, self.cell, self.unsupported = None, None, None, None
         self.batch: ObsBatch | None = None
         self.eps: dict[int, SlotEpisode] = {}  # slot -> its episode, until its record is taken
+        self.seen: dict[int, object] = {}  # slot -> the hook's part of the observation before the step
 
     def slots(self) -> range:
         return range(self.first, self.first + self.num_envs)
@@ -94,20 +97,25 @@ class CellSlots:
         except NotImplementedError as e:  # a cell the perturbation does not support (REALM: 9 of 160)
             self.unsupported = str(e) or "unsupported"
             return
-        self.engine = EpisodeEngine(self.env, every_frame=self.cfg.videos != "none", after_step=self._after_step)
+        self.engine = EpisodeEngine(self.env, every_frame=self.cfg.every_frame(), after_step=self._after_step,
+                                    before_step=self._before_step if self.cfg.hook is not None else None)
 
     def start(self, keys: dict[int, EpisodeKey]) -> dict[int, dict]:
         """Start ``keys`` on their slots (all of one cell); returns each slot's first observation."""
         cell = next(iter(keys.values())).cell()
         if self.cell != cell or (self.env is None and self.unsupported is None):
             self._build(cell)
-        eps = {s: SlotEpisode(key=k, seed=k.seed, max_steps=self.cfg.max_steps, unsupported=self.unsupported) for s, k in keys.items()}
+        max_steps = self.cfg.max_steps or (0 if self.unsupported else self._horizon())
+        eps = {s: SlotEpisode(key=k, seed=k.seed, max_steps=max_steps, unsupported=self.unsupported) for s, k in keys.items()}
         self.eps.update(eps)
         if self.unsupported:
             from realm_ms.eval.backends.base import Unsupported
 
             return {s: Unsupported(self.unsupported) for s in keys}
-        obs, _ = self.engine.reset({s - self.first: ep for s, ep in eps.items()})
+        options = None
+        if self.cfg.hook is not None and len(keys) == 1:  # replayed draws: one sub-env's episode at a time
+            options = self.cfg.hook.reset_options(next(iter(keys.values())))
+        obs, _ = self.engine.reset({s - self.first: ep for s, ep in eps.items()}, options)
         if self.cfg.env_side and self.engine.actor is None:  # built on the env after its first reset
             from realm_ms.eval.policies import make_policy
 
@@ -149,8 +157,16 @@ class CellSlots:
         return rec
 
     def _record(self, ep: SlotEpisode, status: str, stalled: str, error: str | None = None) -> dict:
-        return episode_record(self.cfg, ep, status, skill=self.env.unwrapped.task_spec.skill, success=ep.success,
-                              stalled=stalled, error=error)
+        rec = episode_record(self.cfg, ep, status, skill=self.env.unwrapped.task_spec.skill, success=ep.success,
+                             stalled=stalled, error=error)
+        if self.cfg.hook is not None:
+            rec[HOOKED], ep.hooked = self.cfg.hook.finish(ep, ep.hooked), []
+        return rec
+
+    def _horizon(self) -> int:
+        """The env's episode length: ``max_episode_steps``, else the task's horizon."""
+        u = self.env.unwrapped
+        return u.spec.max_episode_steps or u.task_spec.horizon
 
     def close(self) -> None:
         if self.env is not None:
@@ -158,6 +174,10 @@ class CellSlots:
         self.env, self.engine, self.cell, self.unsupported, self.batch = None, None, None, None, None
 
     # ------------------------------------------------------------------ per step: quality, frames
+    def _before_step(self, obs) -> None:
+        for r in self.engine.running():
+            self.seen[self.first + r] = self.cfg.hook.observe(obs, r)
+
     def _after_step(self, step: Step) -> None:
         slots = [self.first + r for r in step.rows]
         if self.cfg.quality and self.num_envs > 1:
@@ -170,6 +190,10 @@ class CellSlots:
             elif ep.quality is not None:
                 ep.quality.update()
         self._frames(step.obs, slots)  # the finishing step's frame included
+        if self.cfg.hook is not None:
+            actions = _host(step.action)
+            for s in slots:
+                self.eps[s].hooked.append(self.cfg.hook.frame(self.seen.pop(s), actions[s - self.first], self.eps[s]))
 
     def _frames(self, obs, slots: list[int]) -> None:
         if self.cfg.videos == "none":

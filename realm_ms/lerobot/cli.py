@@ -10,6 +10,7 @@ Rerunning the same command resumes: episodes already in the dataset are skipped.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from realm_ms.task_index import DEFAULT
@@ -45,6 +46,8 @@ def add_parser(sub) -> None:
     p.add_argument("--robot-model", default=None, metavar="NAME|MODEL.yaml",
                    help="robot the envs run: a named model (droid-aligned) or a MODEL.yaml (default: the nominal DROID robot)")
     p.add_argument("--commit-every", type=int, default=1, help="finalize + reopen every N episodes, >= 1 (resume granularity)")
+    p.add_argument("--workers", type=int, default=1, help="env processes, >= 1 (default 1: in this process), as `realm eval --workers`")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=run)
 
 
@@ -81,11 +84,15 @@ def run(args) -> int:
             out=args.out, tasks=tasks, episodes=1 if args.episodes is None else args.episodes, perturbations=args.perturbations, seed=args.seed,
             policy=args.policy, repo_id=args.repo_id, success_only=args.success_only, width=args.width,
             height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=args.commit_every,
-            gripper_labels=args.gripper_labels, robot_model=robot_model,
+            gripper_labels=args.gripper_labels, robot_model=robot_model, workers=args.workers, progress=not args.no_progress,
         )
         summary = export_eval_run(args.from_eval, cfg) if args.from_eval is not None else export_dataset(cfg)
     except (ExportError, UnknownNameError) as e:
         raise UserError(str(e)) from None
     print(f"wrote {summary['written']} episode(s) ({summary['already']} already there, {summary['dropped']} dropped); "
           f"{summary['total_episodes']} in {summary['root']} (repo id {summary['repo_id']})")
+    if summary["errors"]:  # not in the dataset, nor in its sidecar: rerunning the command retries them
+        print(f"realm export: {summary['errors']} episode(s) ended in an error (above) and were not "
+              "written; rerun the same command to retry them", file=sys.stderr)
+        return 1
     return 0

@@ -1,9 +1,12 @@
 """Write REALM episodes to a LeRobot v3.0 dataset through LeRobot's own writer API.
 
-``export_dataset(ExportConfig(...))`` plans episodes as tasks x perturbations x seeds, runs each
-with the chosen policy (``rollout.record_episode``) and writes the frames with
-``LeRobotDataset.create`` / ``add_frame`` / ``save_episode`` / ``finalize`` (DROID features, see
-``features.py``); the language instruction is the LeRobot ``task``.
+``export_dataset(ExportConfig(...))`` plans episodes as (task, perturbation, seed) keys, runs them
+through ``realm eval``'s driver (``eval.runner.run_plan``) on its backends (in process, or
+``workers`` processes) with the chosen policy from ``realm eval``'s registry, and writes the frames
+that its record hook (``FrameHook``: one DROID frame per control step, ``features.py``) hands back
+with each finished episode, through ``LeRobotDataset.create`` / ``add_frame`` / ``save_episode`` /
+``finalize``; the language instruction is the LeRobot ``task``. An episode that ends in an error
+(e.g. a policy's bad reply) or whose cell is unsupported is reported and not written.
 
 Per-episode metadata LeRobot's schema has no place for (task id, perturbation and its drawn
 parameters, seed, policy, best progression, success, kept or not) goes to
@@ -20,8 +23,9 @@ import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from realm_ms.lerobot.features import DEFAULT_SIZE, FPS, ROBOT_TYPE, dataset_features, dataset_frame
-from realm_ms.lerobot.rollout import DEFAULT_PERTURBATION
+from realm_ms.eval.protocol import DEFAULT, EpisodeKey
+from realm_ms.eval.protocol import plan as protocol_plan
+from realm_ms.lerobot.features import DEFAULT_SIZE, FPS, ROBOT_TYPE, dataset_features, dataset_frame, obs_to_numpy
 
 SIDECAR = "meta/realm_episodes.jsonl"
 #: ``action[7]`` conventions: the command the policy sent, or DROID's binary close intent
@@ -39,7 +43,7 @@ class ExportConfig:
     out: Path
     tasks: list[str]
     episodes: int = 1  # episodes written per (task, perturbation)
-    perturbations: list[str] = field(default_factory=lambda: [DEFAULT_PERTURBATION])
+    perturbations: list[str] = field(default_factory=lambda: [DEFAULT])
     seed: int = 0  # episode k of a (task, perturbation) cell runs with seed + k
     policy: str = "expert"
     repo_id: str | None = None  # default: realm/<out dir name>
@@ -50,6 +54,7 @@ class ExportConfig:
     shader: str = "default"
     commit_every: int = 1  # finalize + re-open every N episodes (crash-safe resume granularity)
     progress: bool = True
+    workers: int = 1  # env processes (``realm eval``'s process backend); 1 runs in this process
     # "binary": action[7] = 1 wherever the policy commanded any closing, else 0 (DROID's teleoperated
     # trigger and REALM's binary gripper); "command": the gripper command as sent
     gripper_labels: str = "command"
@@ -62,7 +67,7 @@ class ExportConfig:
         if self.repo_id is None:
             self.repo_id = f"realm/{_repo_name(self.out.resolve().name)}"
         check_repo_id(self.repo_id)
-        for name, flag in (("episodes", "--episodes"), ("commit_every", "--commit-every")):
+        for name, flag in (("episodes", "--episodes"), ("commit_every", "--commit-every"), ("workers", "--workers")):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ExportError(f"{flag} must be >= 1 (got {v!r})")
@@ -156,23 +161,16 @@ def _rewrite_sidecar(root: Path, recs: list[dict]) -> None:
 def validate_tasks(tasks: list[str], perturbations: list[str]) -> list[str]:
     """Check the names; returns the perturbations in their registered spelling."""
     import realm_ms  # noqa: F401
+    from realm_ms.eval.protocol import canonical_perturbation
     from realm_ms.tasks import TASKS
 
     unknown = [t for t in tasks if t not in TASKS]
     if unknown:
         raise ExportError(f"unknown task(s) {unknown}; available: {sorted(TASKS)}")
-    out = []
-    for p in perturbations:
-        if p in (DEFAULT_PERTURBATION, "0") or p.lower() == "default":
-            out.append(DEFAULT_PERTURBATION)
-            continue
-        from realm_ms.perturbations import PerturbationSet
-
-        try:
-            out.append(PerturbationSet.resolve(p).name)
-        except ValueError as e:
-            raise ExportError(str(e)) from None
-    return out
+    try:
+        return [canonical_perturbation(p) for p in perturbations]
+    except ValueError as e:
+        raise ExportError(str(e)) from None
 
 
 class _Writer:
@@ -244,59 +242,80 @@ class _Writer:
 
 
 @dataclass
-class Job:
-    """One episode to (re-)simulate."""
+class Plan:
+    """Episodes that run as one ``run_plan`` of ``realm eval``'s driver: one policy and its settings."""
 
-    task: str
-    perturbation: str
-    seed: int
     policy: str
+    keys: list[EpisodeKey]
     replan_every: int = 8
-    perturbation_params: list | None = None  # recorded draws to replay (eval records)
-    max_steps: int | None = None
+    max_steps: int | None = None  # None: the task horizon
+    want: dict[tuple[str, str], int] | None = None  # kept episodes still wanted per cell (None: every key)
+    replay: dict[EpisodeKey, list] = field(default_factory=dict)  # recorded perturbation draws to replay
 
 
-@dataclass
-class Cell:
-    """Jobs of one (task, perturbation): the env is built once; stop after ``want`` kept episodes."""
+def _tried(done: list[dict]) -> set[tuple[EpisodeKey, str]]:
+    from realm_ms.eval.records import key_of
 
-    task: str
-    perturbation: str
-    jobs: list[Job]
-    want: int
+    return {(key_of(r), r["policy"]) for r in done}
 
 
-def _key(task: str, perturbation: str, seed: int, policy: str) -> str:
-    return f"{task}|{perturbation}|{seed}|{policy}"
-
-
-def plan(cfg: ExportConfig, done: list[dict]) -> list[Cell]:
+def plan(cfg: ExportConfig, done: list[dict]) -> list[Plan]:
     """Per (task, perturbation): the seeds not tried yet and how many episodes are still wanted."""
-    tried = {_key(r["task"], r["perturbation"], r["seed"], r["policy"]) for r in done}
-    cells = []
+    tried = _tried(done)
+    keys, want = [], {}
     for task in cfg.tasks:
         for pert in cfg.perturbations:
             kept = sum(bool(r["kept"]) for r in done if r["task"] == task and r["perturbation"] == pert and r["policy"] == cfg.policy)
-            seeds = [cfg.seed + k for k in range(cfg.max_attempts())]
-            jobs = [Job(task, pert, s, cfg.policy, max_steps=cfg.max_steps) for s in seeds if _key(task, pert, s, cfg.policy) not in tried]
-            cells.append(Cell(task, pert, jobs, max(0, cfg.episodes - kept)))
-    return cells
+            want[(task, pert)] = max(0, cfg.episodes - kept)
+            if want[(task, pert)]:
+                keys += [k for k in protocol_plan([task], [pert], cfg.max_attempts(), cfg.seed) if (k, cfg.policy) not in tried]
+    return [Plan(cfg.policy, keys, max_steps=cfg.max_steps, want=want)]
 
 
-def plan_from_records(records: list[dict], done: list[dict], max_steps: int | None = None) -> list[Cell]:
-    """One job per finished ``realm eval`` record (not yet exported), grouped by (task, perturbation)."""
-    tried = {_key(r["task"], r["perturbation"], r["seed"], r["policy"]) for r in done}
-    cells: dict[tuple[str, str], Cell] = {}
+def plan_from_records(records: list[dict], done: list[dict], max_steps: int | None = None) -> list[Plan]:
+    """One key per finished ``realm eval`` record (not yet exported), cell by cell in the records'
+    order; one ``Plan`` per (policy, re-planning interval, episode length) among them."""
+    from realm_ms.eval.records import key_of
+
+    tried = _tried(done)
+    plans: dict[tuple, Plan] = {}
     for r in records:
-        if r.get("status", "ok") != "ok" or _key(r["task"], r["perturbation"], r["seed"], r["policy"]) in tried:
+        key = key_of(r)
+        if r.get("status", "ok") != "ok" or (key, r["policy"]) in tried:
             continue
+        run = (r["policy"], int(r.get("replan_every") or 8), max_steps or r.get("max_steps"))
+        p = plans.setdefault(run, Plan(*run[:1], [], *run[1:]))
+        p.keys.append(key)
         params = (r.get("perturbation_params") or {}).get("params")
-        job = Job(r["task"], r["perturbation"], int(r["seed"]), r["policy"], int(r.get("replan_every") or 8), params or None,
-                  max_steps or r.get("max_steps"))
-        cell = cells.setdefault((job.task, job.perturbation), Cell(job.task, job.perturbation, [], 0))
-        cell.jobs.append(job)
-        cell.want += 1
-    return list(cells.values())
+        if params:
+            p.replay[key] = params
+    for p in plans.values():  # cell-major: a cell's env is built once
+        cells = list(dict.fromkeys(k.cell() for k in p.keys))
+        p.keys.sort(key=lambda k: cells.index(k.cell()))
+    return list(plans.values())
+
+
+@dataclass
+class FrameHook:
+    """The record hook of an export (``eval.runner.EpisodeHook``): a dataset frame per control step,
+    frame t the observation *before* action t with the progression / success *after* it; runs where
+    the env steps, in a worker process too."""
+
+    gripper_labels: str = "command"
+    replay: dict[EpisodeKey, list] = field(default_factory=dict)  # recorded perturbation draws to replay
+
+    def reset_options(self, key: EpisodeKey) -> dict | None:
+        params = self.replay.get(key)
+        return None if params is None else {"perturbation_params": params}
+
+    def observe(self, obs: dict, row: int) -> dict:
+        return obs_to_numpy(obs, row)
+
+    def frame(self, seen: dict, action, ep) -> dict:
+        return dataset_frame(seen, gripper_label(action, self.gripper_labels), ep.progression, ep.success, ep.done, ep.instruction)
+
+    def finish(self, ep, frames: list) -> dict:
+        return dict(frames=frames, best=ep.best)
 
 
 def gripper_label(action, labels: str):
@@ -328,81 +347,98 @@ def _open(cfg: ExportConfig) -> tuple[_Writer, list[dict]]:
     return writer, done
 
 
-def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], cells: list[Cell]) -> dict:
-    from realm_ms.lerobot.rollout import make_export_policy, record_episode, rollout_config
-    from realm_ms.tasks.config import make_env
+def _run(cfg: ExportConfig, writer: _Writer, done: list[dict], plans: list[Plan]) -> dict:
+    """Run the plans on ``realm eval``'s driver and backends (``cfg.workers`` processes, or in
+    process); each finished episode's frames are written (or dropped) in this process, in the order
+    the episodes end."""
+    from tqdm import tqdm
 
-    root = writer.root
-    total = sum(c.want for c in cells)
-    summary = dict(root=str(root), repo_id=cfg.repo_id, written=0, dropped=0, already=sum(bool(r["kept"]) for r in done), episodes=[])
-    bar = _progress(total, cfg.progress)
+    summary = dict(root=str(writer.root), repo_id=cfg.repo_id, written=0, dropped=0, already=sum(bool(r["kept"]) for r in done),
+                   errors=0, episodes=[])
     try:
-        for cell in cells:
-            if cell.want == 0 or not cell.jobs:
-                continue
-            env_config, rest = rollout_config(cell.task, cfg.width, cfg.height, None, cfg.shader, perturbation=cell.perturbation,
-                                              **({"robot_model": cfg.robot_model} if cfg.robot_model else {}))
-            env = make_env(env_config, **rest)
-            policies: dict[str, object] = {}
-            want = cell.want
-            try:
-                for job in cell.jobs:
-                    if want == 0:
-                        break
-                    if job.policy not in policies:
-                        env.reset(seed=job.seed)
-                        policies[job.policy] = make_export_policy(job.policy, env, job.replan_every)
-                        _check_joint_position(job.policy, policies[job.policy])
-
-                    def on_frame(np_obs, action, progression, success, is_done, instruction):
-                        writer.add(dataset_frame(np_obs, gripper_label(action, cfg.gripper_labels), progression, success,
-                                                 is_done, instruction))
-
-                    res = record_episode(env, policies[job.policy], job.seed, on_frame, max_steps=job.max_steps,
-                                         perturbation_params=job.perturbation_params)
-                    keep = res.success or not cfg.success_only
-                    rec = EpisodeRecord(job.task, job.perturbation, job.seed, job.policy, res.instruction, res.steps,
-                                        res.progression, res.success, keep, writer.num_episodes if keep else None,
-                                        (res.perturbation or {}).get("params"), env_config.to_dict(), cfg.gripper_labels)
-                    _append_sidecar(root, rec)  # before the save: a crash mid-save is filtered on resume
-                    if keep:
-                        writer.save()
-                        want -= 1
-                        summary["written"] += 1
-                        bar.advance()
-                    else:
-                        writer.discard()
-                        summary["dropped"] += 1
-                    summary["episodes"].append(asdict(rec))
-                    bar.note(f"{job.task} {job.perturbation} seed {job.seed}: progression {res.progression:.2f} "
-                             f"success {res.success} ({res.steps} steps){'' if keep else ' dropped'}")
-                if want:
-                    bar.note(f"{cell.task} {cell.perturbation}: {want} episode(s) short (only failures in the seeds tried)")
-            finally:
-                env.close()
+        for p in plans:
+            if p.keys:
+                _run_plan(cfg, writer, p, summary)
+            for (task, pert), short in (p.want or {}).items():
+                if short:
+                    tqdm.write(f"{task} {pert}: {short} episode(s) short (only failures in the seeds tried)")
     finally:
         writer.close()
-        bar.close()
-    write_card(cfg, root)
+    write_card(cfg, writer.root)
     summary["total_episodes"] = writer.num_episodes
     return summary
 
 
-def _check_joint_position(spec: str, actor) -> None:
+def _run_plan(cfg: ExportConfig, writer: _Writer, p: Plan, summary: dict) -> None:
+    from tqdm import tqdm
+
+    from realm_ms.eval.backends.choose import choose_backend
+    from realm_ms.eval.policies import make_policy
+    from realm_ms.eval.records import key_of
+    from realm_ms.eval.runner import HOOKED, RunConfig, run_plan
+
+    policy = make_policy(p.policy)
+    try:
+        _check_joint_position(p.policy, policy)
+        req = policy.obs_request()
+        req.width, req.height = cfg.width, cfg.height
+        run_cfg = RunConfig(policy=policy.spec(), env_side=policy.env_side, max_steps=p.max_steps, replan_every=p.replan_every,
+                            obs=req, quality=False, shader=cfg.shader, hook=FrameHook(cfg.gripper_labels, p.replay),
+                            env_kwargs={"robot_model": cfg.robot_model} if cfg.robot_model else {})
+
+        def on_record(rec: dict) -> None:
+            hooked, key = rec.pop(HOOKED, None), key_of(rec)
+            if rec.get("status") != "ok":  # not in the sidecar: a rerun tries an error's episode again
+                summary["errors"] += rec.get("status") == "error"
+                tqdm.write(f"{key.task} {key.perturbation} seed {key.seed}: {rec.get('status')}: {rec.get('error', '')}")
+                return
+            if p.want is not None and p.want[key.cell()] == 0:  # ran beside the episode that completed its cell
+                return
+            keep = rec["success"] or not cfg.success_only
+            for frame in hooked["frames"]:
+                writer.add(frame)
+            er = EpisodeRecord(key.task, key.perturbation, key.seed, p.policy, rec["instruction"], rec["steps"], hooked["best"],
+                               rec["success"], keep, writer.num_episodes if keep else None, rec["perturbation_params"].get("params"),
+                               rec["config"], cfg.gripper_labels)
+            _append_sidecar(writer.root, er)  # before the save: a crash mid-save is filtered on resume
+            if keep:
+                writer.save()
+                summary["written"] += 1
+                if p.want is not None:
+                    p.want[key.cell()] -= 1
+            else:
+                writer.discard()
+                summary["dropped"] += 1
+            summary["episodes"].append(asdict(er))
+            tqdm.write(f"{key.task} {key.perturbation} seed {key.seed}: progression {er.progression:.2f} "
+                       f"success {er.success} ({er.steps} steps){'' if keep else ' dropped'}")
+
+        def full(key: EpisodeKey) -> bool:
+            return p.want is not None and p.want[key.cell()] == 0
+
+        backend = choose_backend("cpu", run_cfg, min(cfg.workers, len(p.keys)))
+        try:
+            run_plan(p.keys, policy, backend, on_record, progress_bar=cfg.progress, replan_every=p.replan_every,
+                     env_kwargs=run_cfg.env_kwargs, skip=full, desc="export episodes")
+        finally:
+            backend.close()
+    finally:
+        policy.close()
+
+
+def _check_joint_position(spec: str, policy) -> None:
     """The dataset's ``action`` is absolute joint targets (``droid_joint_pos``) and the export's env
     runs in that space: a policy (server) that declares another action space is refused, never
     written as if its velocities were joint targets."""
     from realm_ms.errors import UserError
     from realm_ms.eval.policies import policy_action_space
 
-    policy = getattr(actor, "policy", None)  # a ChunkedPolicy's realm eval policy
-    if policy is None or not hasattr(policy, "env_action_space"):
+    if not hasattr(policy, "env_action_space"):
         return
     kw = policy_action_space(policy)
     if kw:
         from realm_ms.agents.droid_action_spaces import action_space_name
 
-        policy.close()
         raise UserError(f"realm export --policy {spec}: the policy acts in {action_space_name(kw)} (its server declares it); "
                         "a dataset stores absolute joint targets (joint_position), so export takes joint_position policies only; "
                         "evaluate this one with `realm eval`")
@@ -479,27 +515,3 @@ def write_card(cfg: ExportConfig, root: Path) -> Path:
     path = root / "README.md"
     card.save(str(path))
     return path
-
-
-class _progress:
-    """A rich progress bar over episodes (or plain prints when disabled)."""
-
-    def __init__(self, total: int, enabled: bool):
-        self.p = None
-        if enabled and total:
-            from rich.progress import Progress
-
-            self.p = Progress(transient=False)
-            self.p.start()
-            self.t = self.p.add_task("export episodes", total=total)
-
-    def advance(self) -> None:
-        if self.p:
-            self.p.advance(self.t)
-
-    def note(self, msg: str) -> None:
-        (self.p.console.print if self.p else print)(msg)
-
-    def close(self) -> None:
-        if self.p:
-            self.p.stop()
