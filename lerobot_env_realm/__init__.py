@@ -57,7 +57,7 @@ class RealmEnvConfig(EnvConfig):
 
     @property
     def gym_kwargs(self) -> dict:
-        # RealmLeRobotEnv maps these onto realm_ms's RealmEnvConfig (lerobot.rollout.rollout_config)
+        # RealmLeRobotEnv maps these onto realm_ms's RealmEnvConfig (eval.runner.cell_config)
         return dict(observation_width=self.observation_width, observation_height=self.observation_height,
                     episode_length=self.episode_length, shader=self.shader, perturbation=self.perturbation,
                     **({"robot_model": self.robot_model} if self.robot_model else {}))

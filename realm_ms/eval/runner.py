@@ -76,23 +76,24 @@ class RunConfig:
         return self.videos != "none" or self.hook is not None
 
 
-def cell_config(task: str, perturbation: str, cfg: RunConfig):
-    """The env of one (task, perturbation) cell as a ``RealmEnvConfig`` (what every backend builds
-    and every record stores), and the ManiSkill keywords it has no field for."""
+def cell_config(task: str, perturbation, cfg: RunConfig):
+    """The env of one (task, perturbation) cell as a ``RealmEnvConfig``, built here once (what every
+    backend builds, every record stores, export datasets and the LeRobot env use), with
+    ``cfg.env_kwargs`` (``gym.make`` keywords: a robot model, an action space, the batched backend's
+    ``num_envs`` / ``sim_backend``) folded in; returns it and the ManiSkill keywords it has no field for."""
+    from realm_ms.rendering import CameraSettings
     from realm_ms.tasks.config import RealmEnvConfig
 
-    kw = dict(
+    config = RealmEnvConfig(
+        task=task,
+        cameras=CameraSettings(width=cfg.obs.width, height=cfg.obs.height, shader=cfg.shader),
+        perturbation=None if perturbation == DEFAULT else perturbation,
+        horizon=cfg.max_steps,
+        success_tail=cfg.success_tail,
         obs_mode="rgb" if cfg.needs_rgb() else "state_dict",
         control_mode="droid_joint_pos",
-        success_tail=cfg.success_tail,
-        camera_width=cfg.obs.width,
-        camera_height=cfg.obs.height,
-        shader=cfg.shader,
-        perturbation=None if perturbation == DEFAULT else perturbation,
     )
-    if cfg.max_steps is not None:
-        kw["max_episode_steps"] = cfg.max_steps
-    return RealmEnvConfig.from_gym_kwargs(task, kw | cfg.env_kwargs)
+    return config.with_kwargs(cfg.env_kwargs)
 
 
 def build_cell_env(task: str, perturbation: str, cfg: RunConfig):

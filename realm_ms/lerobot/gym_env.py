@@ -27,12 +27,16 @@ class RealmLeRobotEnv(gym.Env):
                  observation_height: int = DEFAULT_SIZE[1], episode_length: int | None = None,
                  shader: str = "default", perturbation: str | None = None, render_mode: str = "rgb_array", **env_kwargs):
         super().__init__()
-        from realm_ms.lerobot.rollout import rollout_config
+        from realm_ms.eval.policies.policy import ObsRequest
+        from realm_ms.eval.runner import RunConfig, cell_config
         from realm_ms.tasks.config import make_env
 
         self.task = task
         self.render_mode = render_mode
-        self.config, rest = rollout_config(task, observation_width, observation_height, episode_length, shader, perturbation, **env_kwargs)
+        # the env of realm export's datasets: RGB cameras at the dataset's size, built by the one recipe
+        run = RunConfig(obs=ObsRequest(cameras=tuple(CAMERAS.values()), width=observation_width, height=observation_height),
+                        max_steps=episode_length or None, shader=shader, env_kwargs=env_kwargs)
+        self.config, rest = cell_config(task, perturbation, run)
         self._env = make_env(self.config, **rest)
         u = self._env.unwrapped
         self._max_episode_steps = int(episode_length or u.spec.max_episode_steps or u.task_spec.horizon)

@@ -5,7 +5,8 @@ keyword arguments onto this config (``KWARG_FIELDS``: keyword -> field; an unkno
 error naming the nearest known one); ``gym.make(ID, config=RealmEnvConfig(...))`` passes one
 whole. The env keeps the resolved config as ``env.unwrapped.config``; ``to_dict()`` is plain JSON
 (records store it) and ``make_env(RealmEnvConfig.from_dict(d))`` re-creates the same env.
-Evaluation and the LeRobot plugin build their envs through ``make_env``.
+Evaluation, export and the LeRobot plugin build a cell's config once, typed (``eval.runner.cell_config``),
+and hand it to ``make_env``, which passes the object itself to the env.
 """
 
 from __future__ import annotations
@@ -91,18 +92,17 @@ class RealmEnvConfig:
         _check_maniskill_kwargs(rest)
         return dataclasses.replace(cfg, **top), rest
 
-    @classmethod
-    def from_gym_kwargs(cls, task: str, kwargs: dict) -> tuple["RealmEnvConfig", dict]:
-        """The config that ``gym.make(task, **kwargs)`` describes, ManiSkill's own fields and the
-        horizon (``max_episode_steps``) included; returns it and the keywords it has no field for
-        (ManiSkill's others, e.g. ``sim_config``), to pass on to :func:`make_env`."""
+    def with_kwargs(self, kwargs: dict) -> tuple["RealmEnvConfig", dict]:
+        """This config with the ``gym.make`` keywords of ``kwargs`` folded in, ManiSkill's own fields
+        and the horizon (``max_episode_steps``) included; returns it and the keywords it has no field
+        for (ManiSkill's others, e.g. ``sim_config``), to pass on to :func:`make_env`."""
         kwargs = dict(kwargs)
         horizon = kwargs.pop("max_episode_steps", None)
-        cfg, rest = cls.from_kwargs(kwargs.pop("config", None), kwargs)
+        cfg, rest = self.from_kwargs(self, kwargs)
         top = {name: rest.pop(name) for name in _GYM_FIELDS if name in rest}
         if horizon is not None:
             top["horizon"] = horizon
-        return dataclasses.replace(cfg, task=task, **top), rest
+        return dataclasses.replace(cfg, **top), rest
 
     # ------------------------------------------------------------------ serialisation
     def to_dict(self) -> dict[str, Any]:
