@@ -146,7 +146,7 @@ def export_demos(r: Recipe, jobs: list[tuple[str, str, int, int, Path]]) -> list
         cmd = realm_command() + [
             "export", "--tasks", task, "--perturbations", pert, "--episodes", str(n), "--seed", str(seed),
             "--width", str(r.width), "--height", str(r.height), "--max-steps", str(r.demo_max_steps),
-            "--out", str(root), "--repo-id", f"realm/{root.name}"] + (["--success-only"] if r.success_only else [])
+            "--out", str(root), "--repo-id", f"realm/{root.name}", "--no-progress"] + (["--success-only"] if r.success_only else [])
         log = open(root.parent / f"{root.name}.log", "a")
         procs.append((subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=child_env(), cwd=ROOT), log, root))
     total = sum(j[2] for j in jobs)
