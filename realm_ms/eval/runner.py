@@ -5,9 +5,10 @@ and build the env of a (task, perturbation) cell through ``tasks.make_env``; ``e
 the one record schema every backend writes (the episodes themselves run on the episode engine,
 ``tasks.episode``, through ``slots.CellSlots``: ``EpisodeRunner`` is its one-slot case).
 
-``run_plan`` is the driver: it keeps every slot of a backend busy (``backends/``: in-process, N
-worker processes, batched sub-envs; Ray shards run it per cell), calls the policy once per round on the batch of slots that
-need actions, appends each finished record atomically, and shows a live progress bar.
+``run_plan`` is the driver of ``realm eval`` and ``realm export``: it keeps every slot of a backend
+busy (``backends/``: in-process, N worker processes, batched sub-envs; Ray shards run it per cell),
+calls the policy once per round on the batch of slots that need actions, hands each finished record
+to its caller (an ``EpisodeHook``'s frames riding with it), and shows a live progress bar.
 """
 
 from __future__ import annotations
@@ -227,7 +228,7 @@ def run_plan(keys: list[EpisodeKey], policy, backend, on_record, progress_bar: b
 
     def count_steps(slot: int, steps: int) -> None:
         obs = pending.get(slot)
-        prev = obs.get("steps", 0) or 0 if isinstance(obs, dict) else 0
+        prev = (obs.get("steps", 0) or 0) if isinstance(obs, dict) else 0  # an Unsupported slot has no steps
         prog.env_steps += max(0, int(steps or 0) - prev)
 
     def finish(slot: int, rec: dict) -> None:
