@@ -117,6 +117,8 @@ def test_bad_inputs_are_one_line_errors(exported, tmp_path):
 
     cfg, _ = exported
     assert main(["export", "--tasks", "REALM-Nope-v1", "--episodes", "1", "--out", str(tmp_path / "x")]) == 2
+    assert main(["export", "--tasks", TASKS[0], "--episodes", "1", "--workers", "0", "--out", str(tmp_path / "x")]) == 2
+    assert main(["export", "--tasks", TASKS[0], "--perturbations", "V-NOPE", "--episodes", "1", "--out", str(tmp_path / "x")]) == 2
     # an existing dataset with another image size is refused, not silently mixed
     assert main(["export", "--tasks", TASKS[0], "--episodes", "1", "--out", str(cfg.out), "--width", "32", "--height", "32",
                  "--repo-id", cfg.repo_id]) == 2
@@ -242,7 +244,9 @@ def test_plans_skip_tried_keys_and_replay_recorded_draws():
     """Export's plans are `realm eval` episode keys: tried (key, policy) pairs are skipped, a cell
     with its episodes gets none, and records of a run become keys grouped per policy with their draws."""
     from realm_ms.eval.protocol import EpisodeKey
-    from realm_ms.lerobot.export import ExportConfig, plan, plan_from_records
+    from realm_ms.lerobot.export import ExportConfig, plan, plan_from_records, validate_tasks
+
+    assert validate_tasks(["REALM-PickApple-v1"], ["default", "0", "Default", "v-aug"]) == ["Default", "V-AUG"]
 
     cfg = ExportConfig(out="/tmp/unused_plan_out", tasks=["REALM-PickApple-v1", "REALM-PushSwitch-v1"], episodes=2, seed=5)
     done = [dict(task="REALM-PickApple-v1", perturbation="Default", seed=5, policy="expert", kept=True),

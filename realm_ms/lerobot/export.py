@@ -159,7 +159,7 @@ def _rewrite_sidecar(root: Path, recs: list[dict]) -> None:
 
 
 def validate_tasks(tasks: list[str], perturbations: list[str]) -> list[str]:
-    """Check the names; returns the perturbations in their registered spelling."""
+    """Check the names; returns the perturbations in their registered spelling, each once."""
     import realm_ms  # noqa: F401
     from realm_ms.eval.protocol import canonical_perturbation
     from realm_ms.tasks import TASKS
@@ -168,7 +168,7 @@ def validate_tasks(tasks: list[str], perturbations: list[str]) -> list[str]:
     if unknown:
         raise ExportError(f"unknown task(s) {unknown}; available: {sorted(TASKS)}")
     try:
-        return [canonical_perturbation(p) for p in perturbations]
+        return list(dict.fromkeys(canonical_perturbation(p) for p in perturbations))  # "0" and "Default": one cell
     except ValueError as e:
         raise ExportError(str(e)) from None
 
