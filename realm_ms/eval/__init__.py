@@ -1,6 +1,6 @@
 """Policy evaluation under the REALM protocol: ``realm eval``, metrics, reports, real-vs-sim validation.
 
-``from realm_ms.eval import evaluate``: a whole ``realm eval`` run from Python (``evaluate.py``).
+``from realm_ms.eval import evaluate``: a whole ``realm eval`` run from Python (``evaluation.py``).
 
 Layout (one concept per module):
 
@@ -12,17 +12,12 @@ Layout (one concept per module):
 - ``backends/``: where slots live (``base.py``: the protocol; ``inline.py``, ``processes.py`` with its
   shared-memory wire format, ``batched.py`` for GPU simulation, ``ray.py``; ``choose.py``: the GPU
   probe and ``--backend``);
-- ``evaluate.py``: ``evaluate()``, a whole run (run directory, resume, backend, metrics);
+- ``evaluation.py``: ``evaluate()``, a whole run (run directory, resume, backend, metrics);
 - ``records.py``: append-only JSONL records, resume; ``quality.py``: trajectory quality;
 - ``metrics.py``: success / progression with intervals, failure stages; ``validate.py``: Pearson,
   MMRV, RMSD; ``report.py``: HTML report; ``cli.py``: ``realm eval``.
 """
 
+from realm_ms.eval.evaluation import evaluate  # cheap: its imports are inside the function
 
-def __getattr__(name: str):
-    # imported on first use: ``import realm_ms.eval.<module>`` stays free of the run machinery
-    if name == "evaluate":
-        from realm_ms.eval.evaluate import evaluate
-
-        return evaluate
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__all__ = ["evaluate"]

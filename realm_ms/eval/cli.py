@@ -141,7 +141,7 @@ def run(args) -> int:
         check_ray_address(args.ray_address)
     os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
     proto, tasks, perts = resolve(args)
-    from realm_ms.eval.evaluate import evaluate
+    from realm_ms.eval.evaluation import evaluate
 
     return evaluate(
         args.policy, tasks, perts, proto, args.out, workers=args.workers, backend=args.backend, ray_address=args.ray_address,
