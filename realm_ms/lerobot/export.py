@@ -20,6 +20,7 @@ import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from realm_ms.errors import InputError
 from realm_ms.lerobot.features import DEFAULT_SIZE, FPS, ROBOT_TYPE, dataset_features, dataset_frame
 from realm_ms.lerobot.rollout import DEFAULT_PERTURBATION
 
@@ -30,7 +31,7 @@ BINARY_GRIPPER_THRESHOLD = 0.01  # a command above this is a close intent (the e
 VIDEO_BACKEND = "pyav"  # decoding backend recorded on the writer; also skips torchcodec's noisy probe
 
 
-class ExportError(ValueError):
+class ExportError(InputError):
     """Bad export input (unknown task, mismatching existing dataset, ...): one clear message."""
 
 
