@@ -24,8 +24,8 @@ from realm_ms.eval import report_figures as figs
 from realm_ms.eval.metrics import compute_metrics
 from realm_ms.eval.records import latest_by_key, read_records
 from realm_ms.eval.report_figures import order
-from realm_ms.eval.report_html import (error_banner, esc, figure, page, protocol_block, records_summary, run_protocol, short,
-                                       table, video_gallery)
+from realm_ms.eval.report_html import error_banner, protocol_block, records_summary, run_protocol, short, video_gallery
+from realm_ms.html_kit import esc, figure, page, png, table
 
 # REALM paper, mean task progression per perturbation (realm-spec.md section 6)
 PAPER = {
@@ -102,7 +102,7 @@ def _figures(metrics: dict, files: Path) -> list[str]:
     for name, fig, caption in specs:
         if fig is None:
             continue
-        data = figs.png(fig)
+        data = png(fig)
         (files / name).write_bytes(data)
         out.append(figure(data, f"{esc(caption)} <span class='note'>({esc(name)})</span>", name))
     return [f"<div class='figs'>{''.join(out)}</div>", zero_deltas]
@@ -251,7 +251,7 @@ def write_index(run_dirs: list[Path], out: Path, names: list[str] | None = None,
         error_banner(n_err),
         "<h2>Headline</h2>" + table(["policy", "", "episodes", "success k/n = rate [95% Wilson]", "mean progression [95% bootstrap]",
                                      "errors"], head),
-        figure(figs.png(fig), "Mean progression per perturbation (over its tasks and episodes) for each policy; whiskers: 95 % "
+        figure(png(fig), "Mean progression per perturbation (over its tasks and episodes) for each policy; whiskers: 95 % "
                "bootstrap interval of the mean.", "policies compared per perturbation") if fig is not None else "",
         "<h2>Per perturbation (over tasks)</h2>" + _compare_table(by_pert, names, ["perturbation"]),
         "<h2>Per task (over perturbations)</h2>" + _compare_table(by_task, names, ["task"]),

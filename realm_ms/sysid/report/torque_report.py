@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms.html_kit import esc, sections_page, table
 from realm_ms.sysid.report.figures import new, to_img
-from realm_ms.sysid.report.html import esc, page, table
 from realm_ms.sysid.report.sections import JOINTS
 
 UNIT = "N·m"
@@ -103,6 +103,6 @@ def build_torque_report(train, held, model, out: Path, data_name: str = "", auto
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(out.suffix + ".tmp")
-    tmp.write_text(page(f"realm sysid report (torque space): {data_name}", [head] + sections))
+    tmp.write_text(sections_page(f"realm sysid report (torque space): {data_name}", [head] + sections))
     tmp.replace(out)
     return out
