@@ -5,7 +5,8 @@ the leaf utilities)::
 
     registry, task_index, errors, validate,          leaf utilities (task_index: the task ids,
     contacts, rendering, known_warnings, jsonable,    horizon and Default, shared by every layer;
-    html_kit                                          html_kit: the reports' page, tables, figures;
+    html_kit, atomic                                  html_kit: the reports' page, tables, figures;
+                                                      atomic: the one atomic file write;
                                                       errors, the user-error root, is below the rest)
     agents, assets, asset_pipeline                    the robot; objects and their pipeline
     tasks, sysid                                      envs (on agents + assets); sysid (on agents)
@@ -33,7 +34,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("realm_ms", "asset_pipeline", "lerobot_env_realm")
 LEAVES = {"realm_ms.registry", "realm_ms.task_index", "realm_ms.known_warnings", "realm_ms.errors", "realm_ms.validate", "realm_ms.contacts", "realm_ms.rendering",
-          "realm_ms.jsonable", "realm_ms.html_kit"}
+          "realm_ms.jsonable", "realm_ms.html_kit", "realm_ms.atomic"}
 LAYERS = [
     {"realm_ms.agents", "realm_ms.assets", "asset_pipeline"},
     {"realm_ms.tasks", "realm_ms.sysid"},

@@ -29,6 +29,7 @@ import numpy as np
 
 from realm_ms.agents.actuation import ActuationModel
 from realm_ms.agents.effects import Effect, effect_class, make_effect
+from realm_ms.atomic import write_text
 from realm_ms.errors import InputError
 
 FORMAT_VERSION = 1
@@ -263,10 +264,7 @@ class RobotModel:
 
         path = Path(path)
         RobotModel.from_dict(self.to_dict(), str(path))  # never write a file the loader would refuse
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(yaml.safe_dump(self.to_dict(), sort_keys=False, allow_unicode=True))
-        tmp.replace(path)
+        write_text(path, yaml.safe_dump(self.to_dict(), sort_keys=False, allow_unicode=True))
 
     @classmethod
     def load(cls, path_or_dict: str | Path | dict | "RobotModel" | None) -> "RobotModel":

@@ -20,6 +20,7 @@ import json
 import os
 from pathlib import Path
 
+from realm_ms.atomic import write_text
 from realm_ms.eval import report_figures as figs
 from realm_ms.eval.metrics import compute_metrics
 from realm_ms.eval.records import latest_by_key, read_records
@@ -161,7 +162,7 @@ def write_report(run_dir: Path, out: Path, videos: str = "failures", reference: 
         f"<p class='note'>Figures, <code>table.md</code>, <code>table.csv</code> and <code>metrics.json</code> are also in "
         f"<code>{esc(files.name)}/</code>.</p>",
     ]
-    out.write_text(page(f"realm eval report: {policy}", "\n".join(s for s in sections if s)))
+    write_text(out, page(f"realm eval report: {policy}", "\n".join(s for s in sections if s)))
     return out
 
 
@@ -260,7 +261,7 @@ def write_index(run_dirs: list[Path], out: Path, names: list[str] | None = None,
         "(95 %, 2000 resamples). Error records are not counted. Cell shading follows the value (darker = higher).</p>",
     ]
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page(title, "\n".join(p for p in parts if p)))
+    write_text(out, page(title, "\n".join(p for p in parts if p)))
     return out
 
 

@@ -198,7 +198,8 @@ def run(args) -> int:
         raise UserError(str(e)) from None
     print(format_table(result))
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result, indent=2))
+        from realm_ms.atomic import write_json
+
+        write_json(args.json, result, indent=2)
         print(f"wrote {args.json}")
     return 0

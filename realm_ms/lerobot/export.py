@@ -20,6 +20,7 @@ import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from realm_ms.atomic import write_text
 from realm_ms.errors import InputError
 from realm_ms.lerobot.features import DEFAULT_SIZE, FPS, ROBOT_TYPE, dataset_features, dataset_frame
 from realm_ms.lerobot.rollout import DEFAULT_PERTURBATION
@@ -148,10 +149,7 @@ def _append_sidecar(root: Path, rec: EpisodeRecord) -> None:
 
 
 def _rewrite_sidecar(root: Path, recs: list[dict]) -> None:
-    path = Path(root) / SIDECAR
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text("".join(json.dumps(r) + "\n" for r in recs))
-    tmp.replace(path)
+    write_text(Path(root) / SIDECAR, "".join(json.dumps(r) + "\n" for r in recs))
 
 
 def validate_tasks(tasks: list[str], perturbations: list[str]) -> list[str]:

@@ -46,12 +46,11 @@ def _check_model(args) -> None:
 def _write_json(path: str | None, data: dict) -> None:
     if not path:
         return
+    from realm_ms.atomic import write_json
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
     clean = {k: v for k, v in data.items() if not k.startswith("_")}
-    tmp = p.with_suffix(p.suffix + ".tmp")
-    tmp.write_text(json.dumps(clean, indent=2, default=float))
-    tmp.replace(p)
+    write_json(p, clean, indent=2, default=float)
     print(f"wrote {p}", file=sys.stderr)
 
 
