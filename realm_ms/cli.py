@@ -29,7 +29,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "perturbations": ("realm_ms.perturbations.cli", "REALM's perturbations: list them, render a contact sheet"),
     "export": ("realm_ms.lerobot.cli", "write REALM episodes to a LeRobot v3.0 dataset (DROID features)"),
     "eval": ("realm_ms.eval.cli", "evaluate a policy under the REALM protocol; `realm eval report RUN/` for the report"),
-    "validate": ("realm_ms.eval.validate", "real-vs-sim validation: Pearson r, MMRV, RMSD from a paired CSV"),
+    "validate": ("realm_ms.eval.real_vs_sim", "real-vs-sim statistics of policy rankings: Pearson r, MMRV, RMSD from a paired CSV"),
     "render": ("realm_ms.render_cli", "render contact sheets of the tasks' cameras"),
 }
 

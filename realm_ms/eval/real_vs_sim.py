@@ -176,7 +176,7 @@ def format_table(result: dict) -> str:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("validate", help="real-vs-sim validation: Pearson r, MMRV, RMSD from a paired CSV")
+    p = sub.add_parser("validate", help="real-vs-sim statistics of policy rankings: Pearson r, MMRV, RMSD from a paired CSV")
     p.add_argument("paired", type=Path, help="CSV with columns policy,task,real,sim")
     p.add_argument("--json", type=Path, default=None, help="also write the result as JSON here (a file path)")
     p.add_argument("--percent", action="store_true", help="real/sim are percentages (0-100); default: rates in [0, 1]")
