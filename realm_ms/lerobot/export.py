@@ -58,7 +58,7 @@ class ExportConfig:
     robot_model: str | None = None  # a named robot model or a MODEL.yaml; None = the nominal robot
 
     def __post_init__(self):
-        from realm_ms.validate import InputError, check_seed
+        from realm_ms.validate import check_seed
 
         self.out = Path(self.out)
         if self.repo_id is None:
