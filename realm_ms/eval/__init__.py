@@ -14,7 +14,7 @@ Layout (one concept per module):
   probe and ``--backend``);
 - ``evaluation.py``: ``evaluate()``, a whole run (run directory, resume, backend, metrics);
 - ``records.py``: append-only JSONL records, resume; ``quality.py``: trajectory quality;
-- ``metrics.py``: success / progression with intervals, failure stages; ``validate.py``: Pearson,
+- ``metrics.py``: success / progression with intervals, failure stages; ``real_vs_sim.py``: Pearson,
   MMRV, RMSD; ``report.py``: HTML report; ``cli.py``: ``realm eval``.
 """
 
