@@ -133,3 +133,19 @@ def test_droid_ik_clips_its_nullspace_bias_to_the_joint_bounds():
     assert np.abs(j @ x).max() < 1e-6 and np.all(x >= lo - 1e-9) and np.all(x <= hi + 1e-9)
     legacy = das.DroidIK(clamp_bias=False).cartesian_delta_to_joint_delta(np.zeros((1, 6)), q)[0]
     assert np.abs(legacy - x).max() > 0.02  # the clip changes the step
+
+
+def test_episodes_of_different_lengths_replay_in_their_own_batches(tmp_path, monkeypatch):
+    """A short and a long episode go to separate batches (a batch runs as long as its longest
+    episode); each replays as it does padded in one batch, and per-episode effect rows follow."""
+    eps = _episodes(tmp_path, None)
+    eps[0] = al.DroidEpisode("short_LAB", "LAB", eps[0].q[:20], eps[0].cartesian_cmd[:20], eps[0].gripper[:20])
+    model = {"effects": [{"name": "latency", "params": {"delay": 0.05}}]}
+    apart = al.replay_closed_loop(eps, model)
+    monkeypatch.setattr(al, "BATCH_LENGTH_RATIO", 100.0)
+    together = al.replay_closed_loop(eps, model)
+    assert [len(x) for x in apart] == [20, 60]
+    for a, b in zip(apart, together):
+        np.testing.assert_allclose(a, b, atol=1e-5)
+    found = dict((c["latency.delay"], r) for c, r in al.align_grid(eps, None, {"latency.delay": [0.0, 0.05]}))
+    assert found[0.05].flange_mm == pytest.approx(al.align(eps, model).overall.flange_mm, abs=1e-3)

@@ -214,17 +214,41 @@ def compare_episode(ep: DroidEpisode, q_sim: np.ndarray, ik=None) -> EpisodeAlig
 
 # ---------------------------------------------------------------------------- closed-loop replay
 def replay_closed_loop(episodes: list[DroidEpisode], model=None, sim=None) -> list[np.ndarray]:
-    """Simulated joints (T, 7) per episode: all episodes as arms of one batch, each step's
+    """Simulated joints (T, 7) per episode: episodes as arms of a batch, each step's
     ``cartesian_position`` command turned into a joint target from the simulated state (DROID's
     IK, targets clipped to the joint limits; ``closed_loop.ClosedLoopCommand``), held for the
-    control period; a finished episode holds its last target. ``model``: a robot model (path,
-    dict, ``RobotModel``; None = the nominal robot)."""
+    control period. ``model``: a robot model (path, dict, ``RobotModel``; None = the nominal
+    robot); an effect whose ``theta`` has a row per episode gives each episode its own values.
+    Episodes of similar length share a batch (``BATCH_LENGTH_RATIO``): a batch runs as long as
+    its longest episode, and a finished episode holds its last target until then."""
     from realm_ms.agents.robot_model import load_robot_model
-    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
     from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
 
     model = load_robot_model(model)
     sim = sim or ReplaySimulator(SimConfig.from_model(model))
+    lengths = np.array([e.steps for e in episodes])
+    order = np.argsort(lengths, kind="stable")
+    out: list[np.ndarray] = [None] * len(episodes)  # type: ignore[list-item]
+    start = 0
+    while start < len(order):
+        stop = start + 1
+        while stop < len(order) and lengths[order[stop]] <= BATCH_LENGTH_RATIO * lengths[order[start]]:
+            stop += 1
+        idx = order[start:stop]
+        for i, q in zip(idx, _replay_batch([episodes[i] for i in idx], model, idx, sim)):
+            out[i] = q
+        start = stop
+    return out
+
+
+#: episodes replayed in one batch are within this ratio of lengths (padding costs simulation)
+BATCH_LENGTH_RATIO = 1.5
+
+
+def _replay_batch(episodes: list[DroidEpisode], model, rows: np.ndarray, sim) -> list[np.ndarray]:
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
+
     sub = int(round(model.physics_hz / episodes[0].control_hz))
     lengths = np.array([e.steps for e in episodes])
     steps = int(lengths.max())
@@ -232,8 +256,14 @@ def replay_closed_loop(episodes: list[DroidEpisode], model=None, sim=None) -> li
     switch = np.where(k < lengths[:, None], k * sub, NEVER)
     cmds = np.stack([np.concatenate([e.cartesian_cmd, np.repeat(e.cartesian_cmd[-1:], steps - e.steps, 0)]) for e in episodes])
     q0 = np.stack([e.q[0] for e in episodes])
+    effects = []
+    for fx in model.effects:  # this batch's rows of per-episode parameters
+        th = fx.theta.cpu().numpy()
+        part = make_effect(fx.name, fx.values(), fx.config_dict())
+        part.set_theta(th[rows] if th.shape[0] > 1 else th)
+        effects.append(part)
     closed = ClosedLoopCommand("cartesian_position", switch, cmds)  # every arm switches at step 0
-    out = sim.rollout(q0, np.zeros_like(q0), bind(closed, q0[:, None]), list(model.effects), steps=(steps - 1) * sub)
+    out = sim.rollout(q0, np.zeros_like(q0), bind(closed, q0[:, None]), effects, steps=(steps - 1) * sub)
     return [out[i, : e.steps * sub : sub] for i, e in enumerate(episodes)]
 
 
