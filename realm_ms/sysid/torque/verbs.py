@@ -7,6 +7,7 @@ import numpy as np
 
 from realm_ms.agents.effects import EFFECTS
 from realm_ms.agents.robot_model import RobotModel
+from realm_ms.errors import InputError
 from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judge_verdict, unscreened
 from realm_ms.sysid.timeseries import Trajectory
 from realm_ms.sysid.torque.space import UNIT, Term, TorqueSet, fit_terms, residual_bands, rmse, torque_arm
@@ -132,8 +133,8 @@ def parse_terms(spec: str) -> list[Term]:
         kv = {k: v for k, v in kv.items() if k not in cfg_names}
         unknown = [k for k in kv if k not in t.values]
         if unknown:
-            raise ValueError(f"{name}: unknown or fixed parameter(s) {unknown} in torque space; free: {list(t.values)}")
-        t.values.update({k: float(v) for k, v in kv.items()})
+            raise InputError(f"{name}: unknown or fixed parameter(s) {unknown} in torque space; free: {list(t.values)}")
+        t.values.update({k: float(_value(v, k)) for k, v in kv.items()})
         out.append(t)
     return out
 
@@ -149,9 +150,9 @@ def fit(train, held, add: str, model=None, refit: bool = True, log=print, sets=N
     added = parse_terms(add)
     clash = [t.name for t in added if t.name in {b.name for b in base_terms}]
     if clash:
-        raise ValueError(f"{', '.join(clash)} already in the model; drop it from --add")
+        raise InputError(f"{', '.join(clash)} already in the model; drop it from --add")
     if not added:
-        raise ValueError("nothing to fit: give effects with --add")
+        raise InputError("nothing to fit: give effects with --add")
     before_tr, _ = rmse(tr, base_terms)
     before_he, before_j = rmse(he, base_terms)
     fitted = (base_terms if refit else []) + added
