@@ -301,7 +301,7 @@ def load_each(path: str | Path, options=None, limits: np.ndarray | None = None) 
         return out, []
     read = raw if raw is not None else trajs
     droid = any("command_mode" in tr.meta for tr in read) or any(f.suffix.lower() != ".npz" for f in files)
-    if not droid:
+    if not droid or (not out and len(failed) == 1):  # a single bad log: its own message is the clearest
         raise failed[0]
     skipped = [" ".join(str(e).split()) for e in failed]
     if not out:
