@@ -4,8 +4,10 @@
         [--max-steps N] [--per-lab N] [--episodes N] [--per-episode] [--json OUT.json] [--write-npz DIR]
         [--grid 'target_filter.tau=0.06,0.08;coulomb_friction.fc=0,0.6']
 
-DATA_DIR: episodes as ``../shared/droid_real`` holds them (``index.json`` + ``episodes/*.npz`` with
-``q`` and ``cartesian_position_cmd``). The split is ``realm_ms.sysid.alignment.heldout_split``.
+DATA_DIR: DROID episodes in any format ``realm sysid`` reads (``../shared/droid_real``: ``index.json`` +
+``episodes/*.npz`` with ``t``, ``q`` and ``cartesian_position_cmd``), read by
+``realm_ms.sysid.alignment.read_droid_episodes`` (episodes that fail to read or validate are set
+aside with a warning). The split is ``realm_ms.sysid.alignment.heldout_split``.
 """
 
 from __future__ import annotations
@@ -34,10 +36,12 @@ def main(argv=None) -> int:
                     help="write the selected episodes as the workbench's npz (q_cmd rebuilt from the measured state) instead of replaying them")
     args = ap.parse_args(argv)
     from realm_ms.sysid import alignment
+    from realm_ms.sysid.cli import _show_data_warnings
 
+    _show_data_warnings()
     try:
-        eps = alignment.read_droid_episodes(args.data)
-        held_in, held_out = alignment.heldout_split(eps)
+        eps, _ = alignment.read_droid_episodes(args.data)
+        held_in, held_out = alignment.heldout_split(eps, alignment.read_labs(alignment.episodes_dir(args.data)))
         eps = {"all": eps, "heldin": held_in, "heldout": held_out}[args.split]
         if args.max_steps:
             eps = [e for e in eps if e.steps <= args.max_steps]

@@ -175,12 +175,14 @@ def test_joint_limit_margin_and_nullspace(ik):
     assert hi[0] == 0 and lo[0] == -0.2
     dq = ik.cartesian_delta_to_joint_delta(np.full((1, 6), 0.01), q[None])[0]
     assert dq[0] <= 1e-12 and np.abs(dq).max() > 1e-4
-    # zero command: only self-motion toward q = 0 (nullspace_gain), the flange stays put
+    # zero command: only self-motion toward q = 0 (nullspace_gain), the flange stays put; the bias
+    # is clipped to the joint bounds first (dm_robotics' mapper), so the step is toward the clipped bias
     q = _random_q(5)
     dq = ik.cartesian_delta_to_joint_delta(np.zeros((5, 6)), q)
     assert np.abs(dq).max() > 1e-3
     assert np.abs(np.einsum("bij,bj->bi", ik.jacobian(q), dq)).max() < 1e-6
-    assert np.all(np.einsum("bj,bj->b", dq, -q) > 0)  # toward the reference
+    bias = np.stack([np.clip(das.NULLSPACE_GAIN * -qi * das.CONTROL_HZ, *ik.bounds(qi)) for qi in q])
+    assert np.all(np.einsum("bj,bj->b", dq, bias) > 0)
 
 
 # ---- env wiring --------------------------------------------------------------------------------------

@@ -52,15 +52,16 @@ def _episodes(tmp_path, model):
         eps.append(ep)
     for ep, q in zip(eps, al.replay_closed_loop(eps, model)):
         ep.q = q
-        np.savez(tmp_path / f"{ep.name}.npz", q=q, cartesian_position_cmd=ep.cartesian_cmd, gripper=ep.gripper)
+        np.savez(tmp_path / f"{ep.name}.npz", t=np.arange(len(q)) / 15, q=q, cartesian_position_cmd=ep.cartesian_cmd,
+                 gripper=ep.gripper)
     return eps
 
 
 def test_closed_loop_replay_sees_a_hidden_delay(tmp_path):
     slow = {"effects": [{"name": "latency", "params": {"delay": 0.1}}]}
     _episodes(tmp_path, slow)
-    eps = al.read_droid_episodes(tmp_path)
-    assert [e.lab for e in eps] == ["LAB", "LAB"]
+    eps, skipped = al.read_droid_episodes(tmp_path)
+    assert [e.lab for e in eps] == ["LAB", "LAB"] and skipped == []
     nominal = al.align(eps, None)
     true = al.align(eps, slow, "slow")
     # the true model replays its own data; the nominal arm answers sooner and lands elsewhere
@@ -76,11 +77,75 @@ def test_closed_loop_replay_sees_a_hidden_delay(tmp_path):
     assert found[0.0].flange_mm == pytest.approx(nominal.overall.flange_mm, rel=1e-3)
 
 
-def test_bad_episode_files_get_one_clear_error(tmp_path):
-    from realm_ms.errors import UserError
+def test_a_bad_episode_is_set_aside_and_nothing_usable_is_one_clear_error(tmp_path):
+    from realm_ms.sysid.timeseries import DataError, DataWarning
 
-    np.savez(tmp_path / "x_LAB.npz", q=np.zeros((10, 7)))
-    with pytest.raises(UserError, match="missing cartesian_position_cmd"):
+    t = np.arange(30) / 15
+    home = np.array([0.0, -0.6, 0.0, -2.2, 0.0, 1.6, 0.8])
+    np.savez(tmp_path / "ep0_LAB.npz", t=t, q=np.tile(home, (30, 1)), cartesian_position_cmd=np.zeros((30, 6)))
+    np.savez(tmp_path / "short_LAB.npz", t=t[:10], q=np.tile(home, (10, 1)), cartesian_position_cmd=np.zeros((10, 6)))
+    (tmp_path / "broken_LAB.npz").write_text("not an archive")
+    with pytest.warns(DataWarning, match="left out") as seen:
+        eps, skipped = al.read_droid_episodes(tmp_path)
+    assert [e.name for e in eps] == ["ep0_LAB"] and len(skipped) == 2 == len(seen)
+    assert "broken_LAB.npz" in skipped[0] and "not an .npz archive" in skipped[0]
+    assert "short_LAB.npz" in skipped[1] and "only 10 samples" in skipped[1]
+    (tmp_path / "ep0_LAB.npz").unlink()
+    with pytest.raises(DataError, match="no usable episode; .*broken_LAB.npz.*short_LAB.npz"):
         al.read_droid_episodes(tmp_path)
-    with pytest.raises(UserError, match="no such directory"):
+    with pytest.raises(DataError, match="no such file or directory"):
         al.read_droid_episodes(tmp_path / "nope")
+
+
+def test_one_lab_rule_and_a_split_that_an_unreadable_episode_does_not_move(tmp_path):
+    import json
+
+    (tmp_path / "index.json").write_text(json.dumps([{"file": "a_001.npz", "lab": "TRI"}]))
+    labs = al.read_labs(tmp_path)
+    assert al.lab_of("a_001", labs) == "TRI" and al.lab_of("droid100_007_RAIL", labs) == "RAIL"
+    names = [f"ep{i}_A" for i in range(6)]
+    every = {n: "A" for n in names}
+    eps = [al.DroidEpisode(n, "A", np.zeros((5, 7)), np.zeros((5, 6)), np.zeros(5)) for n in names if n != "ep1_A"]
+    _, out = al.heldout_split(eps, every)
+    assert [e.name for e in out] == ["ep2_A", "ep5_A"]  # as with ep1_A read
+    _, shifted = al.heldout_split(eps)
+    assert [e.name for e in shifted] == ["ep3_A"]  # what counting only the read ones would hold out
+
+
+def test_droid_ik_clips_its_nullspace_bias_to_the_joint_bounds():
+    """dm_robotics' mapper clips the nullspace bias gain (ref - q) / dt to the joint bounds before
+    its second hierarchy: with no Cartesian motion asked, the step is the nullspace direction n
+    times n . clip(bias), inside the 0.2 rad bounds, and leaves the flange where it is."""
+    from realm_ms.agents import droid_action_spaces as das
+
+    ik = das.DroidIK()
+    q = np.array([[0.3, -0.5, 0.2, -2.3, 0.1, 2.0, 0.9]])
+    x = ik.cartesian_delta_to_joint_delta(np.zeros((1, 6)), q)[0]
+    j = ik.jacobian(q)[0]
+    n = np.linalg.svd(j)[2][-1]  # the one nullspace direction of a 7-joint arm
+    lo, hi = ik.bounds(q[0])
+    bias = das.NULLSPACE_GAIN * (das.NULLSPACE_REFERENCE - q[0]) * das.CONTROL_HZ
+    assert np.abs(bias).max() > 0.5  # unclipped, far outside the 0.2 rad bounds
+    s = np.clip(bias, lo, hi) @ n
+    expected = s * n
+    scale = min(1.0, *(hi[k] / expected[k] if expected[k] > 0 else lo[k] / expected[k] for k in range(7) if expected[k]))
+    np.testing.assert_allclose(x, scale * expected, atol=1e-6)
+    assert np.abs(j @ x).max() < 1e-6 and np.all(x >= lo - 1e-9) and np.all(x <= hi + 1e-9)
+    legacy = das.DroidIK(clamp_bias=False).cartesian_delta_to_joint_delta(np.zeros((1, 6)), q)[0]
+    assert np.abs(legacy - x).max() > 0.02  # the clip changes the step
+
+
+def test_episodes_of_different_lengths_replay_in_their_own_batches(tmp_path, monkeypatch):
+    """A short and a long episode go to separate batches (a batch runs as long as its longest
+    episode); each replays as it does padded in one batch, and per-episode effect rows follow."""
+    eps = _episodes(tmp_path, None)
+    eps[0] = al.DroidEpisode("short_LAB", "LAB", eps[0].q[:20], eps[0].cartesian_cmd[:20], eps[0].gripper[:20])
+    model = {"effects": [{"name": "latency", "params": {"delay": 0.05}}]}
+    apart = al.replay_closed_loop(eps, model)
+    monkeypatch.setattr(al, "BATCH_LENGTH_RATIO", 100.0)
+    together = al.replay_closed_loop(eps, model)
+    assert [len(x) for x in apart] == [20, 60]
+    for a, b in zip(apart, together):
+        np.testing.assert_allclose(a, b, atol=1e-5)
+    found = dict((c["latency.delay"], r) for c, r in al.align_grid(eps, None, {"latency.delay": [0.0, 0.05]}))
+    assert found[0.05].flange_mm == pytest.approx(al.align(eps, model).overall.flange_mm, abs=1e-3)

@@ -232,3 +232,35 @@ def test_align_report_on_droid_episodes(tmp_path, ev):
     assert {x["lab"] for x in a["runs"][0]["labs"]} == {"LAB_A", "LAB_B"}
     html = (tmp_path / "a.html").read_text()
     assert "Per lab" in html and "Per-joint overlays" in html and "Waterfall" in html and html.count("<img") >= 3
+
+
+def test_every_verb_sets_a_bad_droid_episode_aside(tmp_path, ev):
+    """A DROID directory with an unreadable and a too-short episode: `realm sysid compare` (as every
+    verb reading DATA through ``load_dir``) leaves both out, one warning line each naming the file
+    and why, and goes on; with nothing usable left it is one line and exit 2. The workbench's own
+    npz directories keep failing on their first bad file."""
+    synth_droid("none", tmp_path, SynthConfig(noise_rad=0.0, **SMALL), "cartesian_position", ("npz",), evaluator=ev)
+    data = tmp_path / "npz" / "train"
+    (data / "broken.npz").write_text("not an archive")
+    np.savez(data / "short.npz", t=np.arange(10) / 15.0, q=np.zeros((10, 7)), cartesian_position_cmd=np.zeros((10, 6)))
+    from realm_ms.sysid.timeseries import DataWarning
+
+    with pytest.warns(DataWarning, match="left out"):
+        assert [tr.name for tr in load_dir(data)] == ["ep_000"]
+    realm = str(Path(sys.executable).parent / "realm")
+    run = lambda d: subprocess.run([realm, "sysid", "compare", str(d), "--workers", "2", "--device", "cpu"],  # noqa: E731
+                                   capture_output=True, text=True, timeout=600)
+    ok = run(data)
+    assert ok.returncode == 0, ok.stderr
+    left = [line for line in ok.stderr.splitlines() if "left out" in line]
+    assert len(left) == 2 and "broken.npz: not an .npz archive" in left[0] and "short.npz: only 10 samples" in left[1]
+    assert "replay of 1 trajectories" in ok.stdout
+    (data / "ep_000.npz").unlink()
+    bad = run(data)
+    assert bad.returncode == 2 and "no usable episode" in bad.stderr and "Traceback" not in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1
+    wb = tmp_path / "wb"
+    wb.mkdir()
+    (wb / "broken.npz").write_text("not an archive")
+    with pytest.raises(DataError, match="broken.npz: not an .npz archive"):
+        load_dir(wb)

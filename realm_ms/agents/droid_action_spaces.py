@@ -165,11 +165,12 @@ class DroidIK:
     ``joint_velocity_to_delta`` to it.
     """
 
-    def __init__(self, nullspace: bool = True):
+    def __init__(self, nullspace: bool = True, clamp_bias: bool = True):
         from realm_ms.agents.panda_droid import droid_arm_model
 
         self.model = droid_arm_model().to("cpu", torch.float64)
         self.nullspace = nullspace
+        self.clamp_bias = clamp_bias
 
     def flange(self, q: np.ndarray) -> np.ndarray:
         """(B, 4, 4) flange (panda_link8) poses in the base frame."""
@@ -204,6 +205,8 @@ class DroidIK:
             x = _bounded_dls(jac[i], delta[i], lo, hi, REGULARIZATION_WEIGHT)
             if self.nullspace:
                 x_ns = NULLSPACE_GAIN * (NULLSPACE_REFERENCE - q[i]) * CONTROL_HZ
+                if self.clamp_bias:  # the mapper clips the bias to the joint bounds before solving
+                    x_ns = np.clip(x_ns, lo, hi)
                 x = _nullspace_step(jac[i], x, x_ns, lo, hi)
             if np.all(np.isfinite(x)):  # a failed solve: the effector returns zeros
                 out[i] = x

@@ -42,56 +42,83 @@ class DroidEpisode:
     cartesian_cmd: np.ndarray  # (T, 6) m / rad euler "xyz", commanded flange pose of each step
     gripper: np.ndarray  # (T,) measured, 0 open .. 1 closed
     control_hz: float = 15.0
+    traj: object = field(default=None, repr=False)  # the workbench Trajectory it was read as (grasp masks)
 
     @property
     def steps(self) -> int:
         return len(self.q)
 
 
-def read_droid_episodes(data_dir: str | Path) -> list[DroidEpisode]:
-    """The ``.npz`` episodes of ``data_dir`` (or its ``episodes/``), keys ``q``,
-    ``cartesian_position_cmd``, optional ``gripper``; ``index.json`` (``file``, ``lab``) names the
-    labs when present, else the file name's last ``_`` part does."""
-    from realm_ms.errors import UserError
+def read_labs(root: Path) -> dict[str, str]:
+    """Episode name (file stem) -> lab from ``index.json`` (``[{file, lab}, ...]``) in ``root`` or its
+    parent; {} when there is none."""
+    from realm_ms.sysid.timeseries import DataError
 
-    root = Path(data_dir)
-    if not root.exists():
-        raise UserError(f"{root}: no such directory; pass a directory of DROID episode .npz files")
-    folder = root / "episodes" if (root / "episodes").is_dir() else root
-    files = [folder] if folder.is_file() else sorted(folder.glob("*.npz"))
-    if not files:
-        raise UserError(f"{root}: no .npz episodes found; pass a directory of DROID episode .npz files")
-    labs = {}
-    index = root / "index.json"
-    if index.is_file():
-        labs = {e["file"]: e.get("lab", "?") for e in json.loads(index.read_text())}
-    out = []
-    for f in files:
-        with np.load(f) as z:
-            missing = [k for k in ("q", "cartesian_position_cmd") if k not in z.files]
-            if missing:
-                raise UserError(f"{f}: missing {', '.join(missing)} (has {', '.join(z.files)}); a DROID episode needs "
-                                f"q (T, 7) measured joints and cartesian_position_cmd (T, 6) commanded flange poses")
-            q, c = np.asarray(z["q"], float), np.asarray(z["cartesian_position_cmd"], float)
-            g = np.asarray(z["gripper"], float) if "gripper" in z.files else np.zeros(len(q))
-        if q.ndim != 2 or q.shape[1] != 7 or c.shape != (len(q), 6) or len(q) < 2:
-            raise UserError(f"{f}: q must be (T, 7) and cartesian_position_cmd (T, 6) with T >= 2, "
-                            f"got {q.shape} and {c.shape}")
-        if not (np.isfinite(q).all() and np.isfinite(c).all()):
-            raise UserError(f"{f}: q or cartesian_position_cmd holds NaN/inf; drop those steps")
-        lab = labs.get(f.name) or f.stem.rsplit("_", 1)[-1]
-        out.append(DroidEpisode(f.stem, lab, q, c, g))
+    root = root if root.is_dir() else root.parent
+    for index in (root / "index.json", root.parent / "index.json"):
+        if index.is_file():
+            try:
+                return {Path(e["file"]).stem: str(e.get("lab", "?")) for e in json.loads(index.read_text())}
+            except (ValueError, KeyError, TypeError):
+                raise DataError(f"{index}: expected a JSON list of {{file, lab}} entries") from None
+    return {}
+
+
+def lab_of(name: str, labs: dict[str, str]) -> str:
+    """The one lab rule: ``index.json``'s entry, else the name's last ``_`` part (``droid100_000_TRI``)."""
+    return labs.get(name) or name.rsplit("_", 1)[-1]
+
+
+def episodes_from(trajs, labs: dict[str, str], ik=None) -> list[DroidEpisode]:
+    """``DroidEpisode`` per workbench trajectory: its ``cartesian_position`` command if it logs one
+    (``--command closed_loop``), else the flange pose of its joint target (logged or rebuilt)."""
+    from realm_ms.agents.droid_action_spaces import DroidIK
+
+    ik, out = ik or DroidIK(), []
+    for tr in trajs:
+        cmd = tr.meta.get("droid_command") or {}
+        pose = cmd["actions"] if cmd.get("space") == "cartesian_position" else ik.pose(tr.q_cmd)
+        g = tr.gripper if tr.gripper is not None else np.zeros(len(tr.t))
+        out.append(DroidEpisode(tr.name, lab_of(tr.name, labs), tr.q, np.asarray(pose, float), g,
+                                float(tr.control_hz or 15.0), tr))
     return out
 
 
-def heldout_split(episodes: list[DroidEpisode]) -> tuple[list[DroidEpisode], list[DroidEpisode]]:
+def read_droid_episodes(data: str | Path, command: str | None = None) -> tuple[list[DroidEpisode], list[str]]:
+    """The DROID episodes of ``data`` (any format ``data_io.load_each`` reads; a directory holding
+    ``episodes/`` and ``index.json``, as ``../shared/droid_real``, too) and one line per episode set
+    aside. ``command``: ``--command MODE[:SPACE]`` (default ``closed_loop``: the logged Cartesian
+    command itself is replayed). Labs: ``read_labs`` / ``lab_of``."""
+    from realm_ms.sysid.data_io import load_each
+    from realm_ms.sysid.droid_formats import ReadOptions
+
+    root = episodes_dir(data)
+    trajs, skipped = load_each(root, ReadOptions.parse(command or "closed_loop"))
+    return episodes_from(trajs, read_labs(root)), skipped
+
+
+def episodes_dir(data: str | Path) -> Path:
+    """Where the episode files of ``data`` are: ``data/episodes`` when it holds them and no npz of its own."""
+    root = Path(data)
+    if root.is_dir() and (root / "episodes").is_dir() and not any(root.glob("*.npz")):
+        return root / "episodes"
+    return root
+
+
+def heldout_split(episodes: list[DroidEpisode], labs: dict[str, str] | None = None
+                  ) -> tuple[list[DroidEpisode], list[DroidEpisode]]:
     """(held in, held out): per lab, episodes sorted by name, every ``HELDOUT_EVERY``-th from the
-    third on is held out (about a third of every lab with three or more episodes)."""
+    third on is held out (about a third of every lab with three or more episodes). ``labs`` (name ->
+    lab of *every* episode of the set, ``read_labs``): positions count the episodes set aside too,
+    so an unreadable episode never moves another across the split."""
+    names = {e.name: e.lab for e in episodes} | (labs or {})
+    rank = {}
+    for lab in sorted(set(names.values())):
+        for i, n in enumerate(sorted(n for n, x in names.items() if x == lab)):
+            rank[n] = i
     held_in, held_out = [], []
-    for lab in sorted({e.lab for e in episodes}):
-        eps = sorted((e for e in episodes if e.lab == lab), key=lambda e: e.name)
-        for i, e in enumerate(eps):
-            (held_out if i % HELDOUT_EVERY == HELDOUT_EVERY - 1 else held_in).append(e)
+    for e in sorted(episodes, key=lambda e: (e.lab, e.name)):
+        (held_out if rank[e.name] % HELDOUT_EVERY == HELDOUT_EVERY - 1 else held_in).append(e)
     return held_in, held_out
 
 
@@ -187,17 +214,41 @@ def compare_episode(ep: DroidEpisode, q_sim: np.ndarray, ik=None) -> EpisodeAlig
 
 # ---------------------------------------------------------------------------- closed-loop replay
 def replay_closed_loop(episodes: list[DroidEpisode], model=None, sim=None) -> list[np.ndarray]:
-    """Simulated joints (T, 7) per episode: all episodes as arms of one batch, each step's
+    """Simulated joints (T, 7) per episode: episodes as arms of a batch, each step's
     ``cartesian_position`` command turned into a joint target from the simulated state (DROID's
     IK, targets clipped to the joint limits; ``closed_loop.ClosedLoopCommand``), held for the
-    control period; a finished episode holds its last target. ``model``: a robot model (path,
-    dict, ``RobotModel``; None = the nominal robot)."""
+    control period. ``model``: a robot model (path, dict, ``RobotModel``; None = the nominal
+    robot); an effect whose ``theta`` has a row per episode gives each episode its own values.
+    Episodes of similar length share a batch (``BATCH_LENGTH_RATIO``): a batch runs as long as
+    its longest episode, and a finished episode holds its last target until then."""
     from realm_ms.agents.robot_model import load_robot_model
-    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
     from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
 
     model = load_robot_model(model)
     sim = sim or ReplaySimulator(SimConfig.from_model(model))
+    lengths = np.array([e.steps for e in episodes])
+    order = np.argsort(lengths, kind="stable")
+    out: list[np.ndarray] = [None] * len(episodes)  # type: ignore[list-item]
+    start = 0
+    while start < len(order):
+        stop = start + 1
+        while stop < len(order) and lengths[order[stop]] <= BATCH_LENGTH_RATIO * lengths[order[start]]:
+            stop += 1
+        idx = order[start:stop]
+        for i, q in zip(idx, _replay_batch([episodes[i] for i in idx], model, idx, sim)):
+            out[i] = q
+        start = stop
+    return out
+
+
+#: episodes replayed in one batch are within this ratio of lengths (padding costs simulation)
+BATCH_LENGTH_RATIO = 1.5
+
+
+def _replay_batch(episodes: list[DroidEpisode], model, rows: np.ndarray, sim) -> list[np.ndarray]:
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.sysid.closed_loop import NEVER, ClosedLoopCommand, bind
+
     sub = int(round(model.physics_hz / episodes[0].control_hz))
     lengths = np.array([e.steps for e in episodes])
     steps = int(lengths.max())
@@ -205,8 +256,14 @@ def replay_closed_loop(episodes: list[DroidEpisode], model=None, sim=None) -> li
     switch = np.where(k < lengths[:, None], k * sub, NEVER)
     cmds = np.stack([np.concatenate([e.cartesian_cmd, np.repeat(e.cartesian_cmd[-1:], steps - e.steps, 0)]) for e in episodes])
     q0 = np.stack([e.q[0] for e in episodes])
+    effects = []
+    for fx in model.effects:  # this batch's rows of per-episode parameters
+        th = fx.theta.cpu().numpy()
+        part = make_effect(fx.name, fx.values(), fx.config_dict())
+        part.set_theta(th[rows] if th.shape[0] > 1 else th)
+        effects.append(part)
     closed = ClosedLoopCommand("cartesian_position", switch, cmds)  # every arm switches at step 0
-    out = sim.rollout(q0, np.zeros_like(q0), bind(closed, q0[:, None]), list(model.effects), steps=(steps - 1) * sub)
+    out = sim.rollout(q0, np.zeros_like(q0), bind(closed, q0[:, None]), effects, steps=(steps - 1) * sub)
     return [out[i, : e.steps * sub : sub] for i, e in enumerate(episodes)]
 
 

@@ -305,29 +305,15 @@ def align(data, model=None, out: str | Path = "align.html", command: str | None 
     error, lag, response; HTML at ``out`` (``report/align_report.py``). Episodes that fail to read
     or validate are left out and listed. Labs come from ``index.json`` (``file`` -> ``lab``) in DATA
     or its parent, else from the name's last ``_`` part."""
-    from realm_ms.sysid.data_io import load_each
+    from realm_ms.sysid.alignment import read_droid_episodes
     from realm_ms.sysid.report.align_report import build_align_report
     from realm_ms.validate import check_output_file
 
     check_output_file(out, "out (--out)")
-    opts = _read_options(command or "closed_loop")
-    root = Path(data)
-    if root.is_dir() and (root / "episodes").is_dir() and not any(root.glob("*.npz")):
-        root = root / "episodes"
-    trajs, skipped = load_each(root, opts)
-    for s in skipped:
-        log(f"warning: left out: {s}")
-    labs = {}
-    for index in (root / "index.json", root.parent / "index.json"):
-        if index.is_file():
-            try:
-                labs = {Path(e["file"]).stem: str(e.get("lab", "?")) for e in json.loads(index.read_text())}
-            except (ValueError, KeyError, TypeError):
-                raise DataError(f"{index}: expected a JSON list of {{file, lab}} entries") from None
-            break
+    episodes, skipped = read_droid_episodes(data, command)
     m = _model(model) if model is not None else None
     name = "nominal" if model is None else Path(str(model)).name
-    return build_align_report(trajs, labs, m, name, Path(out), str(data), skipped, waterfall, log)
+    return build_align_report(episodes, m, name, Path(out), str(data), skipped, waterfall, log)
 
 
 def _load_json(obj, keys: tuple[str, ...], what: str):

@@ -253,65 +253,66 @@ def _files(root: Path) -> list[Path]:
 def load_dir(path: str | Path, limits: np.ndarray | None = None, options=None) -> list[Trajectory]:
     """All trajectories in DATA, validated: a directory of trajectory files (npz / json / csv / h5, see
     ``droid_formats``), one such file, a LeRobot v3.0 dataset, or DROID's raw episode folders
-    (``trajectory.h5`` at any depth: ``[success/]DATE/EPISODE/``). ``options``: ``droid_formats.ReadOptions`` (the command mode)."""
+    (``trajectory.h5`` at any depth: ``[success/]DATE/EPISODE/``). ``options``: ``droid_formats.ReadOptions`` (the command mode).
+    DROID recordings (``load_each``): an episode that fails to read or validate is set aside with a
+    warning; the workbench's own npz files: the first bad one is an error."""
+    return load_each(path, options, limits)[0]
+
+
+def load_each(path: str | Path, options=None, limits: np.ndarray | None = None) -> tuple[list[Trajectory], list[str]]:
+    """``load_dir`` with the episodes it set aside: (trajectories, one line per episode left out).
+    In DROID recordings (any file a DROID log, or a LeRobot dataset of DROID's action spaces) one
+    bad episode should not hide the others: each is left out with a ``DataWarning`` saying which
+    and why; DataError only when nothing usable is left. Elsewhere the first bad file is the error."""
     root = Path(path)
     if not root.exists():
         raise DataError(f"{root}: no such file or directory")
     limits = joint_limits() if limits is None else limits
     if root.is_file() and root.suffix.lower() in DUMP_SUFFIXES:
-        raw = [read_trajectory_file(root, options)]
+        files, raw = [root], None
     elif root.is_file():
         raise DataError(f"{root}: expected a directory of .npz files (or .json, .csv, trajectory.h5 DROID logs), one "
                         "such file or a LeRobot v3.0 dataset directory")
     elif (root / "meta" / "info.json").exists():
-        raw = read_lerobot(root, options)
+        files, raw = [], read_lerobot(root, options)
+    elif (root / "train").is_dir() and (root / "heldout").is_dir() and not any(root.glob("*.npz")):
+        # the layout `synth` writes: all of it (commands that split use load_split)
+        a, b = load_each(root / "train", options, limits), load_each(root / "heldout", options, limits)
+        return a[0] + b[0], a[1] + b[1]
     else:
-        if (root / "train").is_dir() and (root / "heldout").is_dir() and not any(root.glob("*.npz")):
-            # the layout `synth` writes: all of it (commands that split use load_split)
-            return load_dir(root / "train", limits, options) + load_dir(root / "heldout", limits, options)
-        files = _files(root)
+        files, raw = _files(root), None
         if not files:
             sub = [d.name for d in root.iterdir() if d.is_dir()]
             raise DataError(f"{root}: no .npz trajectories (nor .json, .csv, trajectory.h5) and no LeRobot dataset "
                             "(meta/info.json) here" + (f"; subdirectories: {sub}" if sub else ""))
-        raw = [read_trajectory_file(f, options) for f in files]
-    return [validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}") for tr in raw]
-
-
-def load_each(path: str | Path, options=None) -> tuple[list[Trajectory], list[str]]:
-    """Like ``load_dir``, but an episode that fails to read or validate is set aside, not fatal:
-    (trajectories, one line per episode left out). For a set of real episodes where one bad log
-    should not hide the others (``realm sysid align``)."""
-    root = Path(path)
-    if not root.exists():
-        raise DataError(f"{root}: no such file or directory")
-    limits = joint_limits()
-    if root.is_dir() and (root / "meta" / "info.json").exists():
-        raw = read_lerobot(root, options)
-    else:
-        files = [root] if root.is_file() else _files(root)
-        if not files:
-            raise DataError(f"{root}: no .npz trajectories (nor .json, .csv, trajectory.h5) and no LeRobot dataset "
-                            "(meta/info.json) here")
-        raw, skipped = [], []
-        for f in files:
-            try:
-                raw.append(read_trajectory_file(f, options))
-            except DataError as e:
-                skipped.append(str(e))
-        return _validated(raw, limits, root, skipped)
-    return _validated(raw, limits, root, [])
-
-
-def _validated(raw: list[Trajectory], limits, root: Path, skipped: list[str]) -> tuple[list[Trajectory], list[str]]:
+    trajs, failed = [], []
+    for f in files:
+        try:
+            trajs.append(read_trajectory_file(f, options))
+        except DataError as e:
+            failed.append(e)
     out = []
-    for tr in raw:
+    for tr in raw if raw is not None else trajs:
         try:
             out.append(validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}"))
         except DataError as e:
-            skipped.append(str(e))
+            failed.append(e)
+    if not failed:
+        return out, []
+    read = raw if raw is not None else trajs
+    droid = any("command_mode" in tr.meta for tr in read) or any(f.suffix.lower() != ".npz" for f in files)
+    if not droid or (not out and len(failed) == 1):  # a single bad log: its own message is the clearest
+        raise failed[0]
+    skipped = [" ".join(str(e).split()) for e in failed]
     if not out:
-        raise DataError(f"{root}: no usable trajectory; " + ("; ".join(skipped[:3]) or "none found"))
+        raise DataError(f"{root}: no usable episode; " + "; ".join(skipped[:3])
+                        + (f" (and {len(skipped) - 3} more)" if len(skipped) > 3 else ""))
+    import warnings
+
+    from realm_ms.sysid.timeseries import DataWarning
+
+    for line in skipped:
+        warnings.warn(f"left out: {line}", DataWarning, stacklevel=2)
     return out, skipped
 
 

@@ -42,22 +42,6 @@ def response_time_ms(b: float, hz: float = 15.0) -> float:
     return float(-1e3 / hz / np.log(1.0 - b))
 
 
-def episodes_from(trajs, labs: dict[str, str]):
-    """``alignment.DroidEpisode`` per trajectory: its ``cartesian_position`` command if it logs one,
-    else the flange pose of its joint target (logged or rebuilt)."""
-    from realm_ms.agents.droid_action_spaces import DroidIK
-    from realm_ms.sysid.alignment import DroidEpisode
-
-    ik, out = DroidIK(), []
-    for tr in trajs:
-        cmd = tr.meta.get("droid_command") or {}
-        pose = cmd["actions"] if cmd.get("space") == "cartesian_position" else ik.pose(tr.q_cmd)
-        lab = labs.get(tr.name) or tr.name.rsplit("_", 1)[-1]
-        g = tr.gripper if tr.gripper is not None else np.zeros(len(tr.t))
-        out.append(DroidEpisode(tr.name, lab, tr.q, np.asarray(pose, float), g, float(tr.control_hz or 15.0)))
-    return out
-
-
 def run_model(label: str, episodes, model, free: list[np.ndarray]) -> ModelRun:
     from realm_ms.agents.droid_action_spaces import DroidIK
     from realm_ms.sysid.alignment import compare_episode, replay_closed_loop, summarize
@@ -205,16 +189,16 @@ def _waterfall(runs) -> tuple[str, str]:
 
 
 # ---------------------------------------------------------------------------- entry point
-def build_align_report(trajs, labs: dict[str, str], model, model_name: str, out: Path, data_name: str = "",
+def build_align_report(episodes, model, model_name: str, out: Path, data_name: str = "",
                        skipped: list[str] | None = None, waterfall: bool = True, log=print) -> dict:
-    """Write the page to ``out``; return its numbers (the JSON ``realm sysid align --json`` writes)."""
+    """Write the page for ``episodes`` (``alignment.read_droid_episodes``) to ``out``; return its
+    numbers (the JSON ``realm sysid align --json`` writes)."""
     import time
 
     from realm_ms.sysid.interaction import detect
 
     t0 = time.perf_counter()
-    episodes = episodes_from(trajs, labs)
-    hits = [detect(tr) for tr in trajs]
+    hits = [detect(e.traj) for e in episodes]
     free = [~h.masked for h in hits]
     masked = [float(h.masked.mean()) for h in hits]
     steps = waterfall_models(model) if waterfall or model is None else [("nominal", None)]
