@@ -49,9 +49,8 @@ def _write_json(path: str | None, data: dict) -> None:
         return
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    clean = {k: v for k, v in data.items() if not k.startswith("_")}
     tmp = p.with_suffix(p.suffix + ".tmp")
-    tmp.write_text(json.dumps(clean, indent=2, default=float))
+    tmp.write_text(json.dumps(data, indent=2, default=float))
     tmp.replace(p)
     print(f"wrote {p}", file=sys.stderr)
 
@@ -185,7 +184,7 @@ def _compare(args) -> int:
     _check_model(args)
     with _user_input():
         c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space,
-                        command=args.command)
+                        command=args.command).to_json()
     names = [f"J{i}" for i in range(1, 8)]
     if c["unit"] == "N·m":
         print(f"torque space ({c['samples']} samples): inverse-dynamics residual RMSE {c['rmse_nm']:.3e} N·m, "
@@ -226,7 +225,7 @@ def _diagnose(args) -> int:
     _check_model(args)
     with _user_input():
         d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
-                         log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw)
+                         log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw).to_json()
     b = d["baseline"]
     u, sfx = ("N·m", "nm") if d.get("unit") == "N·m" else ("rad", "rad")
     print(f"baseline held-out RMSE {b[f'heldout_rmse_{sfx}']:.3e} {u}, noise floor ≈ {b[f'noise_floor_{sfx}']:.2e} {u}")
@@ -254,7 +253,7 @@ def _fit(args) -> int:
                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                     generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
                     noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space,
-                    command=args.command)
+                    command=args.command).to_json()
     print(f"fitted {', '.join(f['effects'])} -> {args.out}")
     torque = f.get("unit") == "N·m"  # torque space reports N·m (and its params carry no unit table)
     unit, key, fmt, train_fmt = ("N·m", "nm", "9.3f", ".3f") if torque else ("rad", "rad", "9.2e", ".2e")
@@ -292,7 +291,7 @@ def _auto(args) -> int:
         a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                      progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                      generations=args.generations, max_steps=args.max_steps, space=args.space,
-                     command=args.command)
+                     command=args.command).to_json()
     f = a["final"]
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")

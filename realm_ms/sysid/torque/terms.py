@@ -34,8 +34,6 @@ from typing import Callable
 
 import torch
 
-from realm_ms.agents.effects.parameter import ParamSpec
-
 EPS = 0.01  # rad/s, smooth sign of the friction laws
 TRACKING_ONLY = ("latency", "target_filter", "gain_mismatch", "torque_limit", "backlash", "encoder_bias")
 
@@ -189,6 +187,3 @@ TERMS: dict[str, Callable] = {
     "lugre_friction": lugre,
     "armature": armature, "payload": payload, "gravity_comp_error": gravity_error, "link_mass": link_mass,
 }
-
-#: torque-space-only parameter specs (effects not in the simulation library; none at present)
-EXTRA_SPECS: dict[str, list[ParamSpec]] = {}
