@@ -77,6 +77,23 @@ class FitResult:
             out["split"] = self.split
         return out
 
+    def lines(self) -> list[str]:
+        """The terminal summary: fitted values with units and bounds, per-joint held-out RMSE."""
+        out = [f"  {k:<32} {v:.5g} {self.units[k]}   bounds {self.bounds[k]}" for k, v in self.params.items()]
+        out.append("                     " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)) + "      all")
+        for when, m in (("before", self.before), ("after", self.after)):
+            out.append(f"{when:<6} held-out [rad] " + " ".join(f"{v:9.2e}" for v in m["per_joint_heldout_rmse_rad"])
+                       + f"  {m['heldout_rmse_rad']:9.2e}   (train {m['train_rmse_rad']:.2e})")
+        return out + at_bounds_lines(self.model.params_at_bounds())
+
+
+def at_bounds_lines(at_bounds: dict[str, str]) -> list[str]:
+    """A fit's parameters pressed against a bound, as a terminal line (none if there are none)."""
+    if not at_bounds:
+        return []
+    return ["at a bound (the effect is stretched to explain something else): "
+            + ", ".join(f"{k} ({side})" for k, side in at_bounds.items())]
+
 
 @dataclass
 class CompareResult:
@@ -99,6 +116,21 @@ class CompareResult:
                 "saturated_fraction": self.saturated_fraction, "interaction_fraction": self.interaction_fraction,
                 "noise_floor_per_joint_rad": self.noise_floor_per_joint, "trajectories": self.trajectories,
                 "error_over_time": self.error_over_time}
+
+    def lines(self) -> list[str]:
+        """The terminal summary: per-joint RMSE and max error, masked samples, worst trajectories."""
+        out = [f"replay of {len(self.trajectories)} trajectories: RMSE {self.rmse:.3e} rad, noise floor ≈ {self.noise_floor:.2e} rad",
+               "joint      " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)),
+               "RMSE [rad] " + " ".join(f"{v:9.2e}" for v in self.per_joint_rmse),
+               "max  [rad] " + " ".join(f"{v:9.2e}" for v in self.per_joint_max_abs_error)]
+        if self.interaction_fraction:
+            out.append(f"grasps and stalls against the scene (not modelled by an arm-only replay): {self.interaction_fraction:.1%} "
+                       "of the scored samples simulated but not scored; per trajectory: "
+                       + ", ".join(f"{t['name']} {t['masked']['masked']:.0%}" for t in self.trajectories if t.get("masked")
+                                   and t["masked"]["masked"] > 0))
+        worst = sorted(self.trajectories, key=lambda t: -(t["rmse_rad"] or 0))[:3]
+        out.append("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
+        return out
 
 
 def _metrics(tr: GroupScores, he: GroupScores) -> dict:

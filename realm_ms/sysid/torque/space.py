@@ -38,6 +38,13 @@ class TorqueCompare:
                 "noise_floor_nm": self.noise_floor, "noise_floor_per_joint_nm": self.noise_floor_per_joint,
                 "samples": self.samples, "residual_bands": self.residual_bands}
 
+    def lines(self) -> list[str]:
+        """The terminal summary: residual RMSE per joint and by frequency band."""
+        return [f"torque space ({self.samples} samples): inverse-dynamics residual RMSE {self.rmse:.3e} N·m, "
+                f"noise floor ≈ {self.noise_floor:.2e} N·m",
+                "joint       " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)),
+                "RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in self.per_joint_rmse)] + band_lines(self.residual_bands)
+
 
 @dataclass
 class TorqueFit:
@@ -65,6 +72,23 @@ class TorqueFit:
         if self.split is not None:
             out["split"] = self.split
         return out
+
+    def lines(self) -> list[str]:
+        """The terminal summary: fitted values, per-joint held-out RMSE, residual by band."""
+        from realm_ms.sysid.fit import at_bounds_lines
+
+        out = [f"  {k:<32} {v:.5g}" for k, v in self.params.items()]
+        for when, m in (("before", self.before), ("after", self.after)):
+            out.append(f"{when:<6} held-out [N·m] " + " ".join(f"{v:9.3f}" for v in m["per_joint_heldout_rmse_nm"])
+                       + f"  {m['heldout_rmse_nm']:9.3f}   (train {m['train_rmse_nm']:.3f})")
+        return out + band_lines(self.residual_bands) + at_bounds_lines(self.model.params_at_bounds())
+
+
+def band_lines(b: dict) -> list[str]:
+    """Torque residual per frequency band (``torque/spectrum.py``), as terminal lines."""
+    return (["by band     " + " ".join(f"{'J' + str(i):>9}" for i in range(1, 8)) + "    share"]
+            + [f"{name:<11} " + " ".join(f"{v:9.3f}" for v in row) + f"   {100 * share:5.1f}%"
+               for name, row, share in zip(b["bands"], b["rms_per_joint"], b["share"])])
 
 
 def _errors(ts_tr: TorqueSet, ts_he: TorqueSet, terms: list[Term]) -> dict:
