@@ -200,3 +200,21 @@ def test_diagnose_names_the_library_effects_it_did_not_screen():
     assert v == "found" and "not screened" not in msg
     v, msg, _ = judge_verdict(0.2e-3, 0.1e-3, [], CFG, left_out=left)
     assert v == "no_missing_effect" and "not screened" not in msg
+
+
+def test_contenders_leave_out_look_alikes_the_space_cannot_model():
+    """Torque space has no latency (a tracking effect): auto must not queue it as a look-alike of
+    viscous damping there, as it does in position space."""
+    from realm_ms.sysid.auto import contenders
+
+    top = _s("viscous_damping", 5e-3, 1e-3)
+    assert "latency" in [c.effect for c in contenders([top], ("viscous_damping",), set())]
+    torque_like = ["viscous_damping", "coulomb_friction"]
+    assert "latency" not in [c.effect for c in contenders([top], ("viscous_damping",), set(), torque_like)]
+
+
+def test_auto_message_uses_the_configured_found_factor_and_unit():
+    from realm_ms.sysid.auto import _message
+
+    msg = _message("at_floor", 1e-1, 0.5, 0.3, [], found_factor=2.0, unit="N·m")
+    assert "<= 2x 3.00e-01 N·m" in msg and "1.5x" not in msg and " rad" not in msg

@@ -124,10 +124,6 @@ class Diagnosis:
     def saturated_fraction(self) -> float:
         return self.replayed.saturated_fraction if self.replayed else 0.0
 
-    @property
-    def features(self) -> Features | None:
-        return self.replayed.features if self.replayed else None
-
     def to_json(self) -> dict:
         k = UNIT_KEYS[self.unit]
         baseline = {f"heldout_rmse_{k}": float(self.baseline_heldout_rmse), f"noise_floor_{k}": float(self.noise_floor),
