@@ -6,8 +6,8 @@ imported (``realm --help`` lists the commands from ``COMMANDS`` alone), and modu
 imports (torch, sapien, mani_skill) inside their handlers, so help is instant (a test checks it). The
 ``REALM-*`` envs are registered before a handler runs, unless its parser says
 ``set_defaults(needs_envs=False)`` (sysid, assets). Bad input ends in one line on stderr and exit
-code 2: ``realm_ms.errors.UserError``, raised by handlers, and ``realm_ms.validate.InputError``
-(a ``ValueError``; e.g. the sysid ``DataError``), raised by the shared checks below them.
+code 2: ``realm_ms.errors.UserError``, the root of every user error (handlers raise it; the shared
+checks below them raise its ``InputError`` kind, e.g. the sysid ``DataError``).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "perturbations": ("realm_ms.perturbations.cli", "REALM's perturbations: list them, render a contact sheet"),
     "export": ("realm_ms.lerobot.cli", "write REALM episodes to a LeRobot v3.0 dataset (DROID features)"),
     "eval": ("realm_ms.eval.cli", "evaluate a policy under the REALM protocol; `realm eval report RUN/` for the report"),
-    "validate": ("realm_ms.eval.validate", "real-vs-sim validation: Pearson r, MMRV, RMSD from a paired CSV"),
+    "validate": ("realm_ms.eval.real_vs_sim", "real-vs-sim statistics of policy rankings: Pearson r, MMRV, RMSD from a paired CSV"),
     "render": ("realm_ms.render_cli", "render contact sheets of the tasks' cameras"),
 }
 
@@ -85,15 +85,13 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.verbose:
         os.environ["REALM_MS_VERBOSE"] = "1"
-    from realm_ms.validate import InputError
-
     if getattr(args, "needs_envs", True):
         from realm_ms import register_envs
 
         register_envs()
     try:
         return int(args.func(args) or 0)
-    except (UserError, InputError) as e:  # InputError: the shared checks, incl. the sysid DataError
+    except UserError as e:  # the root of every user error
         msg = " ".join(str(e).split()) or type(e).__name__  # always one line
         print(f"{_prog(parser, argv)}: error: {msg}", file=sys.stderr)
         return 2

@@ -12,11 +12,14 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
 
+from realm_ms.errors import InputError
+
 T = TypeVar("T")
 
 
-class UnknownNameError(ValueError):
-    """A name that no entry of a registry carries; the message lists the known names."""
+class UnknownNameError(InputError):
+    """A name that no entry of a registry carries; the message lists the known names. Names come
+    from the user (flags, config files), so it is a user error (and a ``ValueError``)."""
 
 
 class Registry(Generic[T]):

@@ -4,7 +4,8 @@ Two forms of each check, so the command line, the Python API and config files re
 things with the same words (``docs/validation.md`` lists what is rejected):
 
 * value checks (``check_positive(x, "--segment", "s")``) raise :class:`InputError` (a
-  ``ValueError``); ``realm`` prints it as ``realm VERB: error: ...`` and exits with code 2;
+  ``UserError`` and a ``ValueError``); ``realm`` prints it as ``realm VERB: error: ...`` and exits
+  with code 2;
 * argparse types (``type=positive("s")``) reject a flag while parsing (argparse: exit code 2).
 
 Numbers: NaN and infinities are always rejected; ``positive`` means > 0, ``non-negative`` >= 0.
@@ -21,10 +22,7 @@ import re
 from pathlib import Path
 from typing import Any, Callable
 
-
-class InputError(ValueError):
-    """Bad user input; the message names what is wrong and where (flag, field or file). The
-    ``realm`` command prints it like a ``UserError`` (one line, exit code 2)."""
+from realm_ms.errors import InputError  # noqa: F401  (the checks' error; importers take it from here)
 
 
 def _units(unit: str) -> str:

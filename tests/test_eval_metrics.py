@@ -8,7 +8,7 @@ import pytest
 
 from realm_ms.cli import main
 from realm_ms.eval.metrics import bootstrap_interval, compute_metrics, difference_interval, wilson_interval
-from realm_ms.eval.validate import mmrv, pearson_r, rmsd
+from realm_ms.eval.real_vs_sim import mmrv, pearson_r, rmsd
 
 
 def test_wilson_matches_hand_computation():

@@ -39,6 +39,32 @@ def test_repeated_add_accumulates(tmp_path, capsys, monkeypatch):
     assert code == 2 and seen["add"] == "coulomb_friction,payload:mass=0.5"
 
 
+@pytest.mark.parametrize("bug", [ValueError("a bug"), KeyError("a bug")])
+def test_a_bug_below_the_cli_keeps_its_traceback(bug, tmp_path, monkeypatch):
+    """Only user errors become one line and exit code 2; a ValueError or KeyError from a bug in the
+    workbench is not the user's input and must not be reported as if it were."""
+    from realm_ms.sysid import api
+
+    def broken(*a, **k):
+        raise bug
+
+    monkeypatch.setattr(api, "compare", broken)
+    data = _write(tmp_path / "d", np.arange(40) / 15.0)
+    with pytest.raises(type(bug), match="a bug"):
+        main(["sysid", "compare", str(data)])
+
+
+def test_a_user_error_below_the_cli_is_one_line(tmp_path, monkeypatch, capsys):
+    from realm_ms.sysid import api
+    from realm_ms.validate import check_positive
+
+    monkeypatch.setattr(api, "compare", lambda *a, **k: check_positive(0, "segment (--segment)", "s"))
+    data = _write(tmp_path / "d", np.arange(40) / 15.0)
+    assert main(["sysid", "compare", str(data)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == ["realm sysid compare: error: segment (--segment): must be > 0 s, got 0"]
+
+
 @pytest.mark.parametrize("adds, msg", [
     (["latency", "latency"], "given twice"),
     (["coulomb_friction,payload", "payload"], "given twice"),

@@ -8,6 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from realm_ms.errors import UserError
+from realm_ms.registry import UnknownNameError
+from realm_ms.sysid.timeseries import DataError
 from realm_ms.validate import (
     InputError,
     check_int,
@@ -85,3 +88,41 @@ def test_bench_scripts_refuse_a_folder_as_out_before_they_run(tmp_path, script):
                        capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
     assert f"--out: {tmp_path} is a directory; give a file path" in r.stderr
+
+
+def _raise(exc):
+    def handler(args):
+        raise exc
+
+    return handler
+
+
+@pytest.mark.parametrize("exc", [
+    UserError("give --tasks"),
+    InputError("--segment: must be > 0 s, got 0"),
+    UnknownNameError("unknown task 'X'; known: A, B"),
+    DataError("d/traj.npz: missing key(s) ['q']"),
+], ids=lambda e: type(e).__name__)
+def test_every_user_error_is_one_line_and_exit_2(exc, monkeypatch, capsys):
+    """One root: whatever kind of user error a command raises, `realm` prints one line and exits 2."""
+    from realm_ms import cli
+    from realm_ms.sysid import cli as sysid_cli
+
+    monkeypatch.setattr(sysid_cli, "_effects", _raise(exc))
+    assert cli.main(["sysid", "effects"]) == 2
+    assert capsys.readouterr().err.splitlines() == [f"realm sysid effects: error: {exc}"]
+
+
+def test_input_errors_stay_value_errors_for_python_callers():
+    assert issubclass(InputError, UserError) and issubclass(InputError, ValueError)
+    assert issubclass(UnknownNameError, InputError) and issubclass(DataError, InputError)
+
+
+def test_other_errors_are_not_user_errors(monkeypatch):
+    """A ValueError that is not a user error is a bug: it keeps its traceback."""
+    from realm_ms import cli
+    from realm_ms.sysid import cli as sysid_cli
+
+    monkeypatch.setattr(sysid_cli, "_effects", _raise(ValueError("a bug")))
+    with pytest.raises(ValueError, match="a bug"):
+        cli.main(["sysid", "effects"])

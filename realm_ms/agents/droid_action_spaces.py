@@ -33,6 +33,8 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
+from realm_ms.errors import InputError
+
 # RobotIKSolver.__init__ (droid/robot_ik/robot_ik_solver.py)
 MAX_JOINT_DELTA = 0.2  # rad per step (relative_max_joint_delta = 0.2 for every joint)
 MAX_GRIPPER_DELTA = 0.25
@@ -56,9 +58,9 @@ GRIPPER_SPACES = ("position", "velocity")
 def check_action_space(action_space: str, gripper_action_space: str | None) -> None:
     """ValueError naming the known spaces when either name is unknown."""
     if action_space not in ACTION_SPACES:
-        raise ValueError(f"unknown action_space {action_space!r}; known: {', '.join(ACTION_SPACES)}")
+        raise InputError(f"unknown action_space {action_space!r}; known: {', '.join(ACTION_SPACES)}")
     if gripper_action_space is not None and gripper_action_space not in GRIPPER_SPACES:
-        raise ValueError(f"unknown gripper_action_space {gripper_action_space!r}; known: {', '.join(GRIPPER_SPACES)} "
+        raise InputError(f"unknown gripper_action_space {gripper_action_space!r}; known: {', '.join(GRIPPER_SPACES)} "
                          f"(or None: DROID's default, velocity for the velocity spaces)")
 
 
@@ -75,7 +77,7 @@ def check_control_mode(action_space: str, gripper_action_space: str | None, cont
     if action_space == "joint_position" and gripper_action_space in (None, "position"):
         return
     space = action_space + (f":{gripper_action_space}" if gripper_action_space else "")
-    raise ValueError(f"action_space {space!r} is DROID's and needs control_mode={DROID_CONTROL_MODE!r} (got "
+    raise InputError(f"action_space {space!r} is DROID's and needs control_mode={DROID_CONTROL_MODE!r} (got "
                      f"{control_mode!r}); leave control_mode out, or use action_space='joint_position' with "
                      f"ManiSkill's modes")
 

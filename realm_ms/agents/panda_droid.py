@@ -29,6 +29,7 @@ from realm_ms.agents.arm_model import ArmModel
 from realm_ms.agents.control.config import DroidControlConfig
 from realm_ms.agents.control.maniskill import DroidJointImpedanceControllerConfig
 from realm_ms.contacts import any_contact
+from realm_ms.errors import InputError
 from realm_ms.rendering import CameraSettings, vertical_fov
 from realm_ms.agents.urdf import ARM_JOINTS, CAMERA_LINK, DROID_RESET_QPOS, FLANGE_LINK, TCP_LINK, panda_droid_urdf_path
 
@@ -102,7 +103,7 @@ class PandaDroid(BaseAgent):
             model = load_actuation_model(model)
         arm = self.controllers["droid_joint_pos"].controllers["arm"] if "droid_joint_pos" in self.controllers else None
         if arm is None:
-            raise ValueError("robot_model needs the droid_joint_pos control mode")
+            raise InputError("robot_model needs the droid_joint_pos control mode")
         arm.set_robot_model(model)
         model.build(self.robot, arm.active_joint_indices.tolist())
 

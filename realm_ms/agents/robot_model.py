@@ -29,6 +29,8 @@ import numpy as np
 
 from realm_ms.agents.actuation import ActuationModel
 from realm_ms.agents.effects import Effect, effect_class, make_effect
+from realm_ms.atomic import write_text
+from realm_ms.errors import InputError
 
 FORMAT_VERSION = 1
 #: robot models shipped with the package, by name: ``robot_model="droid-aligned"`` anywhere a robot
@@ -53,15 +55,15 @@ def check_physics_hz(value: Any, where: str = "physics_hz") -> float:
     try:
         hz = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{where}: expected a number in Hz, got {value!r}") from None
+        raise InputError(f"{where}: expected a number in Hz, got {value!r}") from None
     if not math.isfinite(hz) or hz <= 0:
-        raise ValueError(f"{where}: must be a positive number of Hz, got {value!r}")
+        raise InputError(f"{where}: must be a positive number of Hz, got {value!r}")
     lo, hi = PHYSICS_HZ_RANGE
     if not lo <= hz <= hi:
-        raise ValueError(f"{where}: {hz:g} Hz is outside the supported {lo:g}-{hi:g} Hz (e.g. 120, 240, 480)")
+        raise InputError(f"{where}: {hz:g} Hz is outside the supported {lo:g}-{hi:g} Hz (e.g. 120, 240, 480)")
     steps = hz / CONTROL_HZ
     if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
-        raise ValueError(f"{where}: {hz:g} Hz is not a whole multiple of the {CONTROL_HZ} Hz control rate "
+        raise InputError(f"{where}: {hz:g} Hz is not a whole multiple of the {CONTROL_HZ} Hz control rate "
                          f"(e.g. 120, 240, 480)")
     return hz
 
@@ -81,16 +83,16 @@ def check_settings(effect: Effect, where: str) -> None:
         unit = POSITIVE_SETTINGS.get(f.name)
         if isinstance(default, bool):
             if not isinstance(v, bool):
-                raise ValueError(f"{where}.{f.name}: expected true or false, got {v!r}")
+                raise InputError(f"{where}.{f.name}: expected true or false, got {v!r}")
             continue
         values = v if isinstance(default, tuple) else (v,)
         if isinstance(default, tuple) and (not isinstance(v, tuple) or len(v) != len(default)):
-            raise ValueError(f"{where}.{f.name}: expected a list of {len(default)} numbers, got {v!r}")
+            raise InputError(f"{where}.{f.name}: expected a list of {len(default)} numbers, got {v!r}")
         for x in values:
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
-                raise ValueError(f"{where}.{f.name}: expected {'finite numbers' if values is v else 'a finite number'}, got {v!r}")
+                raise InputError(f"{where}.{f.name}: expected {'finite numbers' if values is v else 'a finite number'}, got {v!r}")
             if unit and x <= 0:
-                raise ValueError(f"{where}.{f.name}: must be > 0 {unit} (a tanh width), got {v!r}")
+                raise InputError(f"{where}.{f.name}: must be > 0 {unit} (a tanh width), got {v!r}")
 
 
 def check_effects(effects: list[Effect], where: str, labels: list[str] | None = None) -> None:
@@ -102,8 +104,8 @@ def check_effects(effects: list[Effect], where: str, labels: list[str] | None = 
         check_settings(e, f"{where}{label}.config")
         if e.name in seen:
             if seen[e.name] == label:  # named by the effect alone (a spec on the command line)
-                raise ValueError(f"{where}effect {e.name!r} given twice; give it once")
-            raise ValueError(f"{where}{label}: effect {e.name!r} given twice (also {seen[e.name]}); give it once")
+                raise InputError(f"{where}effect {e.name!r} given twice; give it once")
+            raise InputError(f"{where}{label}: effect {e.name!r} given twice (also {seen[e.name]}); give it once")
         seen[e.name] = label
 
 
@@ -124,7 +126,7 @@ def unit_factor(given: Any, unit: str, where: str) -> float:
         return 1.0
     factor = _UNIT_SPELLINGS.get(unit, {}).get(text)
     if factor is None:
-        raise ValueError(f"{where}: {text!r} is not {unit} and cannot be converted to it; write the values in {unit}")
+        raise InputError(f"{where}: {text!r} is not {unit} and cannot be converted to it; write the values in {unit}")
     return factor
 
 
@@ -133,14 +135,14 @@ def _convert_units(name: str, params: dict, config: dict, units: Any, where: str
     if units is None:
         return params
     if not isinstance(units, dict):
-        raise ValueError(f"{where}: expected a mapping of parameter -> unit, got {units!r}")
+        raise InputError(f"{where}: expected a mapping of parameter -> unit, got {units!r}")
     effect = make_effect(name, None, config)
     specs = {s.name: s for s in effect.specs}
     spec_of = {p.local_key: p.spec.name for p in effect.params} | {n: n for n in specs}  # fc4 -> fc
     factors = {}
     for key, given in units.items():
         if key not in specs:
-            raise ValueError(f"{where}.{key}: effect {name!r} has no parameter {key!r}; it has {', '.join(specs)}")
+            raise InputError(f"{where}.{key}: effect {name!r} has no parameter {key!r}; it has {', '.join(specs)}")
         factors[key] = unit_factor(given, specs[key].unit, f"{where}.{key}")
     out = {}
     for key, v in params.items():
@@ -215,23 +217,23 @@ class RobotModel:
     def from_dict(cls, data: dict[str, Any], where: str = "robot model") -> "RobotModel":
         """Parse and validate; every problem is a one-line ``ValueError`` naming ``where`` and the field."""
         if not isinstance(data, dict):
-            raise ValueError(f"{where}: expected a mapping at the top level, got {type(data).__name__}")
+            raise InputError(f"{where}: expected a mapping at the top level, got {type(data).__name__}")
         version = data.get("realm_ms_robot_model", FORMAT_VERSION)
         if version != FORMAT_VERSION:
-            raise ValueError(f"{where}: format version {version} not supported (expected {FORMAT_VERSION})")
+            raise InputError(f"{where}: format version {version} not supported (expected {FORMAT_VERSION})")
         items = data.get("effects") or []
         if not isinstance(items, list):
-            raise ValueError(f"{where}: effects: expected a list of effects (e.g. `effects: [{items}]`), "
+            raise InputError(f"{where}: effects: expected a list of effects (e.g. `effects: [{items}]`), "
                              f"got {type(items).__name__} {items!r}")
         effects = []
         for i, item in enumerate(items):
             if isinstance(item, str):
                 item = {"name": item}
             if not isinstance(item, dict) or "name" not in item:
-                raise ValueError(f"{where}: effects[{i}]: expected a name or a mapping with 'name', got {item!r}")
+                raise InputError(f"{where}: effects[{i}]: expected a name or a mapping with 'name', got {item!r}")
             for key in ("params", "config"):
                 if item.get(key) is not None and not isinstance(item[key], dict):
-                    raise ValueError(f"{where}: effects[{i}].{key}: expected a mapping, got {item[key]!r}")
+                    raise InputError(f"{where}: effects[{i}].{key}: expected a mapping, got {item[key]!r}")
             try:
                 effect_class(item["name"])
                 config = item.get("config") or {}
@@ -240,7 +242,7 @@ class RobotModel:
                 effects.append(make_effect(item["name"], params, config))
             except (KeyError, ValueError, TypeError) as e:
                 msg = e.args[0] if isinstance(e, KeyError) and e.args else e
-                raise ValueError(f"{where}: effects[{i}]: {msg}") from None
+                raise InputError(f"{where}: effects[{i}]: {msg}") from None
         check_effects(effects, f"{where}: ", [f"effects[{i}]" for i in range(len(effects))])
         from realm_ms.agents.control.presets import GAIN_PRESETS, JOINT_PHYSICS_PRESETS
 
@@ -248,7 +250,7 @@ class RobotModel:
         for key, table, default in (("gains", GAIN_PRESETS, "polymetis"), ("joint_physics", JOINT_PHYSICS_PRESETS, "none")):
             presets[key] = str(data.get(key, default))
             if presets[key] not in table:
-                raise ValueError(f"{where}: {key}: unknown preset {presets[key]!r}; choose one of {', '.join(sorted(table))}")
+                raise InputError(f"{where}: {key}: unknown preset {presets[key]!r}; choose one of {', '.join(sorted(table))}")
         return cls(
             effects,
             gains=presets["gains"],
@@ -262,10 +264,7 @@ class RobotModel:
 
         path = Path(path)
         RobotModel.from_dict(self.to_dict(), str(path))  # never write a file the loader would refuse
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(yaml.safe_dump(self.to_dict(), sort_keys=False, allow_unicode=True))
-        tmp.replace(path)
+        write_text(path, yaml.safe_dump(self.to_dict(), sort_keys=False, allow_unicode=True))
 
     @classmethod
     def load(cls, path_or_dict: str | Path | dict | "RobotModel" | None) -> "RobotModel":
@@ -286,10 +285,10 @@ class RobotModel:
         try:
             data = yaml.safe_load(path.read_text())
         except UnicodeDecodeError:
-            raise ValueError(f"{path}: not a text (YAML) file") from None
+            raise InputError(f"{path}: not a text (YAML) file") from None
         except yaml.YAMLError as e:
             first = str(e).strip().splitlines()[0] if str(e).strip() else "syntax error"
-            raise ValueError(f"{path}: not valid YAML ({first})") from None
+            raise InputError(f"{path}: not valid YAML ({first})") from None
         return cls.from_dict(data, str(path))
 
     def copy(self) -> "RobotModel":

@@ -22,10 +22,11 @@ import math
 import functools
 import hashlib
 import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from string import Template
+
+from realm_ms.atomic import write_text
 
 __all__ = [
     "ARM_JOINTS",
@@ -143,7 +144,7 @@ def collision_obj_dir(src: Path) -> Path:
         obj = out / (stl.stem + ".obj")
         if not obj.is_file():
             mesh = trimesh.load(stl, process=False, force="mesh")
-            _atomic_write(obj, trimesh.exchange.obj.export_obj(mesh, include_normals=False, digits=9))
+            write_text(obj, trimesh.exchange.obj.export_obj(mesh, include_normals=False, digits=9))
     return out
 
 
@@ -182,19 +183,6 @@ def render_urdf_text(kind: str = "panda_droid") -> tuple[str, str]:
     return urdf, srdf
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 @functools.lru_cache(maxsize=None)
 def _render_cached(kind: str, cache: str) -> Path:
     urdf, srdf = render_urdf_text(kind)
@@ -202,9 +190,9 @@ def _render_cached(kind: str, cache: str) -> Path:
     out = Path(cache) / f"{kind}_{digest}.urdf"
     srdf_path = out.with_suffix(".srdf")
     if not (out.is_file() and out.read_text() == urdf):
-        _atomic_write(out, urdf)
+        write_text(out, urdf)
     if not (srdf_path.is_file() and srdf_path.read_text() == srdf):
-        _atomic_write(srdf_path, srdf)
+        write_text(srdf_path, srdf)
     return out
 
 

@@ -318,7 +318,9 @@ def evaluate(policy_spec: str, tasks, perturbations, proto, out: Path, workers: 
         writer.close()
         policy.close()
         metrics = compute_metrics(read_records(out / "records.jsonl"))
-        (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
+        from realm_ms.atomic import write_json
+
+        write_json(out / "metrics.json", metrics, indent=2)
     o = metrics["overall"]
     if not quiet:
         print(f"{o['episodes']} episodes: success {o['success_rate']:.3f} [{o['success_ci'][0]:.3f}, {o['success_ci'][1]:.3f}], "

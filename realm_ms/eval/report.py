@@ -20,12 +20,13 @@ import json
 import os
 from pathlib import Path
 
+from realm_ms.atomic import write_text
 from realm_ms.eval import report_figures as figs
 from realm_ms.eval.metrics import compute_metrics
 from realm_ms.eval.records import latest_by_key, read_records
 from realm_ms.eval.report_figures import order
-from realm_ms.eval.report_html import (error_banner, esc, figure, page, protocol_block, records_summary, run_protocol, short,
-                                       table, video_gallery)
+from realm_ms.eval.report_html import error_banner, protocol_block, records_summary, run_protocol, short, video_gallery
+from realm_ms.html_kit import esc, figure, page, png, table
 
 # REALM paper, mean task progression per perturbation (realm-spec.md section 6)
 PAPER = {
@@ -102,7 +103,7 @@ def _figures(metrics: dict, files: Path) -> list[str]:
     for name, fig, caption in specs:
         if fig is None:
             continue
-        data = figs.png(fig)
+        data = png(fig)
         (files / name).write_bytes(data)
         out.append(figure(data, f"{esc(caption)} <span class='note'>({esc(name)})</span>", name))
     return [f"<div class='figs'>{''.join(out)}</div>", zero_deltas]
@@ -161,7 +162,7 @@ def write_report(run_dir: Path, out: Path, videos: str = "failures", reference: 
         f"<p class='note'>Figures, <code>table.md</code>, <code>table.csv</code> and <code>metrics.json</code> are also in "
         f"<code>{esc(files.name)}/</code>.</p>",
     ]
-    out.write_text(page(f"realm eval report: {policy}", "\n".join(s for s in sections if s)))
+    write_text(out, page(f"realm eval report: {policy}", "\n".join(s for s in sections if s)))
     return out
 
 
@@ -251,7 +252,7 @@ def write_index(run_dirs: list[Path], out: Path, names: list[str] | None = None,
         error_banner(n_err),
         "<h2>Headline</h2>" + table(["policy", "", "episodes", "success k/n = rate [95% Wilson]", "mean progression [95% bootstrap]",
                                      "errors"], head),
-        figure(figs.png(fig), "Mean progression per perturbation (over its tasks and episodes) for each policy; whiskers: 95 % "
+        figure(png(fig), "Mean progression per perturbation (over its tasks and episodes) for each policy; whiskers: 95 % "
                "bootstrap interval of the mean.", "policies compared per perturbation") if fig is not None else "",
         "<h2>Per perturbation (over tasks)</h2>" + _compare_table(by_pert, names, ["perturbation"]),
         "<h2>Per task (over perturbations)</h2>" + _compare_table(by_task, names, ["task"]),
@@ -260,7 +261,7 @@ def write_index(run_dirs: list[Path], out: Path, names: list[str] | None = None,
         "(95 %, 2000 resamples). Error records are not counted. Cell shading follows the value (darker = higher).</p>",
     ]
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page(title, "\n".join(p for p in parts if p)))
+    write_text(out, page(title, "\n".join(p for p in parts if p)))
     return out
 
 

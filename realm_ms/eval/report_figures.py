@@ -3,8 +3,6 @@ nothing (the caller then says so in words instead of drawing an empty box)."""
 
 from __future__ import annotations
 
-import io
-
 PAPER_ORDER = ["Default", "V-AUG", "V-VIEW", "V-SC", "V-LIGHT", "S-PROP", "S-LANG", "S-MO", "S-AFF", "S-INT", "B-HOBJ",
                "SB-NOUN", "SB-VRB", "VB-POSE", "VB-MOBJ", "VSB-NOBJ"]  # REALM's table order
 SUCCESS_COLOR = "#5a5"
@@ -12,15 +10,6 @@ SUCCESS_COLOR = "#5a5"
 
 def order(perts) -> list[str]:
     return sorted(perts, key=lambda p: (PAPER_ORDER.index(p) if p in PAPER_ORDER else len(PAPER_ORDER), p))
-
-
-def png(fig) -> bytes:
-    import matplotlib.pyplot as plt
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100, bbox_inches="tight")
-    plt.close(fig)
-    return buf.getvalue()
 
 
 def _short(t: str) -> str:

@@ -1,69 +1,21 @@
-"""HTML pieces of the eval reports (``realm_ms.eval.report``): the page skeleton, tables, the
-protocol header every page starts with, episode labels and the inline video gallery.
+"""HTML pieces of the eval reports (``realm_ms.eval.report``) on the shared kit
+(``realm_ms.html_kit``: style, page, tables, figures): the protocol header every page starts
+with, episode labels and the inline video gallery.
 
-Everything is self-contained (CSS inline, figures as data URIs); videos stay files next to the run
-and are referenced relatively, so a report can be moved together with its run directory.
+Videos stay files next to the run and are referenced relatively, so a report can be moved together
+with its run directory.
 """
 
 from __future__ import annotations
 
 import base64
-import html
 import io
 import json
 import os
 from pathlib import Path
 
 from realm_ms.eval.provenance import CONTROL_HZ, describe_action_space
-
-CSS = """
-body{font-family:system-ui,-apple-system,sans-serif;max-width:1240px;margin:1.5em auto;padding:0 1em;color:#222;line-height:1.35}
-h1{font-size:1.55em;margin-bottom:.2em} h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
-table{border-collapse:collapse;margin:.5em 0;font-size:.88em} td,th{border:1px solid #ddd;padding:3px 8px;text-align:right;vertical-align:top}
-th{background:#f3f3f3} td.l,th.l{text-align:left}
-.proto{display:grid;grid-template-columns:max-content 1fr;gap:2px 14px;font-size:.9em;background:#f7f7f9;border:1px solid #e2e2e8;
- padding:.6em .9em;border-radius:6px;margin:.6em 0}
-.proto dt{color:#555} .proto dd{margin:0}
-.headline{font-size:1.05em;margin:.6em 0} .headline b{font-size:1.15em}
-.err{color:#a00;font-weight:600} .ok{color:#161} .warn{background:#fff3cd;border:1px solid #e6d28a;padding:.4em .7em;border-radius:4px}
-.note{color:#555;font-size:.9em}
-.figs{display:flex;flex-wrap:wrap;gap:10px 28px;align-items:flex-start}
-figure{margin:.6em 0;display:table} figure img{max-width:100%;border:1px solid #eee}
-figcaption{display:table-caption;caption-side:bottom;font-size:.86em;color:#444;padding-top:4px}
-.vids{display:grid;grid-template-columns:repeat(auto-fill,minmax(380px,1fr));gap:12px}
-.vid{border:1px solid #ddd;border-radius:6px;padding:6px;background:#fafafa;font-size:.85em}
-.vid video{width:100%;height:auto;background:#000;display:block}
-.tag{display:inline-block;padding:0 6px;border-radius:3px;font-weight:600}
-.tag.s{background:#d8f0d8;color:#145214} .tag.f{background:#f8dcdc;color:#7a1010} .tag.e{background:#eee;color:#555}
-.grid{display:flex;flex-wrap:wrap;gap:0 36px;align-items:flex-start} .grid h2{font-size:1.05em}
-.cmp td.v{font-variant-numeric:tabular-nums} .cmp th[colspan]{text-align:center}
-"""
-
-
-def esc(s) -> str:
-    return html.escape(str(s))
-
-
-def table(header: list[str], rows: list[list], left: int = 1, cls: str = "") -> str:
-    """Cells that start with ``<`` are inserted as HTML, everything else is escaped."""
-    def cell(v, i, tag):
-        align = ' class="l"' if i < left else ""
-        return f"<{tag}{align}>{v if isinstance(v, str) and v.startswith('<') else esc(v)}</{tag}>"
-
-    head = "<tr>" + "".join(cell(h, i, "th") for i, h in enumerate(header)) + "</tr>"
-    body = "".join("<tr>" + "".join(cell(v, i, "td") for i, v in enumerate(r)) + "</tr>" for r in rows)
-    return f'<table class="{cls}">{head}{body}</table>'
-
-
-def page(title: str, body: str) -> str:
-    return (f"<!doctype html><html><head><meta charset='utf-8'><title>{esc(title)}</title><style>{CSS}</style></head>"
-            f"<body>{body}</body></html>")
-
-
-def figure(png: bytes, caption: str, alt: str) -> str:
-    return (f'<figure><img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="{esc(alt)}">'
-            f"<figcaption>{caption}</figcaption></figure>")
-
+from realm_ms.html_kit import esc
 
 def short(task: str) -> str:
     return task.removeprefix("REALM-").removesuffix("-v1")

@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from realm_ms.atomic import write_json
 from realm_ms.eval.protocol import EpisodeKey
 from realm_ms.eval.records import FINISHED, key_of, numbered_records
 from realm_ms.validate import InputError, check_output_path
@@ -118,7 +119,4 @@ def check_records(out: Path, fp: dict, problems: list[str]) -> tuple[list[dict],
 
 def write_run_json(out: Path, meta: dict) -> None:
     """``RUN/run.json``, replaced atomically (a kill never leaves half of it)."""
-    path = out / "run.json"
-    tmp = path.with_name("run.json.tmp")
-    tmp.write_text(json.dumps(meta, indent=2))
-    tmp.replace(path)
+    write_json(out / "run.json", meta, indent=2)

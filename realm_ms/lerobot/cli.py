@@ -50,8 +50,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from realm_ms.errors import UserError
-    from realm_ms.lerobot.export import ExportConfig, ExportError, export_dataset, export_eval_run
-    from realm_ms.registry import UnknownNameError
+    from realm_ms.lerobot.export import ExportConfig, export_dataset, export_eval_run
 
     if args.from_eval is None and (not args.tasks or args.episodes is None):
         raise UserError("give --tasks and --episodes (or --from-eval RUN)")
@@ -76,16 +75,14 @@ def run(args) -> int:
         from realm_ms.tasks import TASKS
 
         tasks = sorted(TASKS)
-    try:
-        cfg = ExportConfig(
-            out=args.out, tasks=tasks, episodes=1 if args.episodes is None else args.episodes, perturbations=args.perturbations, seed=args.seed,
-            policy=args.policy, repo_id=args.repo_id, success_only=args.success_only, width=args.width,
-            height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=args.commit_every,
-            gripper_labels=args.gripper_labels, robot_model=robot_model,
-        )
-        summary = export_eval_run(args.from_eval, cfg) if args.from_eval is not None else export_dataset(cfg)
-    except (ExportError, UnknownNameError) as e:
-        raise UserError(str(e)) from None
+    # ExportError and UnknownNameError are user errors: `realm` prints them as one line
+    cfg = ExportConfig(
+        out=args.out, tasks=tasks, episodes=1 if args.episodes is None else args.episodes, perturbations=args.perturbations, seed=args.seed,
+        policy=args.policy, repo_id=args.repo_id, success_only=args.success_only, width=args.width,
+        height=args.height, max_steps=args.max_steps, shader=args.shader, commit_every=args.commit_every,
+        gripper_labels=args.gripper_labels, robot_model=robot_model,
+    )
+    summary = export_eval_run(args.from_eval, cfg) if args.from_eval is not None else export_dataset(cfg)
     print(f"wrote {summary['written']} episode(s) ({summary['already']} already there, {summary['dropped']} dropped); "
           f"{summary['total_episodes']} in {summary['root']} (repo id {summary['repo_id']})")
     return 0

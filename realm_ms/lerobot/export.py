@@ -20,6 +20,8 @@ import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from realm_ms.atomic import write_text
+from realm_ms.errors import InputError
 from realm_ms.lerobot.features import DEFAULT_SIZE, FPS, ROBOT_TYPE, dataset_features, dataset_frame
 from realm_ms.lerobot.rollout import DEFAULT_PERTURBATION
 
@@ -30,7 +32,7 @@ BINARY_GRIPPER_THRESHOLD = 0.01  # a command above this is a close intent (the e
 VIDEO_BACKEND = "pyav"  # decoding backend recorded on the writer; also skips torchcodec's noisy probe
 
 
-class ExportError(ValueError):
+class ExportError(InputError):
     """Bad export input (unknown task, mismatching existing dataset, ...): one clear message."""
 
 
@@ -56,7 +58,7 @@ class ExportConfig:
     robot_model: str | None = None  # a named robot model or a MODEL.yaml; None = the nominal robot
 
     def __post_init__(self):
-        from realm_ms.validate import InputError, check_seed
+        from realm_ms.validate import check_seed
 
         self.out = Path(self.out)
         if self.repo_id is None:
@@ -147,10 +149,7 @@ def _append_sidecar(root: Path, rec: EpisodeRecord) -> None:
 
 
 def _rewrite_sidecar(root: Path, recs: list[dict]) -> None:
-    path = Path(root) / SIDECAR
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text("".join(json.dumps(r) + "\n" for r in recs))
-    tmp.replace(path)
+    write_text(Path(root) / SIDECAR, "".join(json.dumps(r) + "\n" for r in recs))
 
 
 def validate_tasks(tasks: list[str], perturbations: list[str]) -> list[str]:

@@ -282,15 +282,15 @@ def _load_json(obj, keys: tuple[str, ...], what: str):
     if not isinstance(obj, (str, Path)):
         return obj
     p = Path(obj)
+    if not p.is_file():
+        raise InputError(f"{p} not found" + (" (it is a directory)" if p.is_dir() else ""))
     try:
         data = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{p} not found") from None
-    except json.JSONDecodeError as e:
-        raise ValueError(f"{p}: not valid JSON ({e})") from None
-    missing = [k for k in keys if k not in data]
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise InputError(f"{p}: not valid JSON ({e})") from None
+    missing = [k for k in keys if not isinstance(data, dict) or k not in data]
     if missing:
-        raise ValueError(f"{p}: not a `{what}` output (missing {', '.join(missing)})")
+        raise InputError(f"{p}: not a `{what}` output (missing {', '.join(missing)})")
     return data
 
 

@@ -20,19 +20,15 @@ def _user_error(msg: str):
 
 
 @contextmanager
-def _user_input(what: str = ""):
-    """Turn errors caused by user input (data, specs, model files) into UserError."""
-    from realm_ms.sysid.timeseries import DataError
+def _flag(flag: str):
+    """A user error raised while reading FLAG's value names the flag; anything else (a bug) is
+    left to traceback."""
+    from realm_ms.errors import UserError
 
     try:
         yield
-    except DataError as e:
-        raise _user_error(str(e)) from None
-    except FileNotFoundError as e:
-        raise _user_error(f"{what}{e}") from None
-    except (ValueError, KeyError) as e:
-        msg = e.args[0] if isinstance(e, KeyError) and e.args else e
-        raise _user_error(f"{what}{msg}") from None
+    except UserError as e:
+        raise _user_error(f"{flag}: {e}") from None
 
 
 def _check_model(args) -> None:
@@ -40,18 +36,20 @@ def _check_model(args) -> None:
     if getattr(args, "model", None):
         from realm_ms.agents.robot_model import RobotModel
 
-        with _user_input("--model: "):
-            RobotModel.load(args.model)
+        with _flag("--model"):
+            try:
+                RobotModel.load(args.model)
+            except FileNotFoundError as e:  # the API's type for a missing file; here it is the user's
+                raise _user_error(str(e)) from None
 
 
 def _write_json(path: str | None, data: dict) -> None:
     if not path:
         return
+    from realm_ms.atomic import write_json
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_suffix(p.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=float))
-    tmp.replace(p)
+    write_json(p, data, indent=2, default=float)
     print(f"wrote {p}", file=sys.stderr)
 
 
@@ -145,16 +143,15 @@ def _synth(args) -> int:
     if args.rate < args.control_hz:
         raise _user_error(f"--rate {args.rate:g} Hz is below the control rate --control-hz {args.control_hz:g} Hz")
     _check_outputs(args, dirs=("--out",))
-    with _user_input("--hidden: "):
+    with _flag("--hidden"):
         parse_effects(args.hidden, default_values="nominal")
     common = dict(seed=args.seed, noise_rad=args.noise, rate_hz=args.rate, n_train=args.n_train,
                   n_heldout=args.n_heldout, duration_s=args.duration, control_hz=args.control_hz, engine=args.engine)
-    with _user_input():
-        if args.droid_space:
-            info = api.synth_droid(args.hidden, args.out, args.droid_space, args.format or ["npz"],
-                                   log_joint_target=args.log_joint_target, **common)
-        else:
-            info = api.synth(args.hidden, args.out, **common)
+    if args.droid_space:
+        info = api.synth_droid(args.hidden, args.out, args.droid_space, args.format or ["npz"],
+                               log_joint_target=args.log_joint_target, **common)
+    else:
+        info = api.synth(args.hidden, args.out, **common)
     where = f"{args.out}/<format>/" if args.droid_space else f"{args.out}"
     print(f"wrote {args.n_train} train + {args.n_heldout} held-out trajectories to {where} "
           f"(hidden: {info['hidden']}; truth in truth.yaml)")
@@ -165,7 +162,7 @@ def _synth_native(args) -> int:
     from realm_ms.sysid.reference_native import VARIANTS, NativeEffects, synth_native
 
     _check_outputs(args, dirs=("--out",))
-    with _user_input("--hidden: "):
+    with _flag("--hidden"):
         NativeEffects.parse(VARIANTS.get(args.hidden, args.hidden))
     rate = 1000.0 if args.torque_only and args.rate == 15.0 else args.rate
     info = synth_native(args.hidden, args.out, seed=args.seed, n_train=args.n_train, n_heldout=args.n_heldout,
@@ -182,9 +179,8 @@ def _compare(args) -> int:
     _check_data(args.data)
     _check_outputs(args, files=("--json",))
     _check_model(args)
-    with _user_input():
-        c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space,
-                        command=args.command)
+    c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space,
+                    command=args.command)
     print("\n".join(c.lines()))
     _write_json(args.json, c.to_json())
     return 0
@@ -197,16 +193,15 @@ def _diagnose(args) -> int:
     kw = {}
     if args.candidates:
         kw["candidates"] = tuple(s.strip() for s in args.candidates.split(",") if s.strip())
-        with _user_input("--candidates: "):
+        with _flag("--candidates"):
             from realm_ms.agents.effects import effect_class
 
             for name in kw["candidates"]:
                 effect_class(name)
     _check_outputs(args, files=("--json",))
     _check_model(args)
-    with _user_input():
-        d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
-                         log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw).to_json()
+    d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
+                     log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw).to_json()
     from realm_ms.sysid.diagnose import UNIT_KEYS
 
     b, u = d["baseline"], d["unit"]
@@ -227,16 +222,15 @@ def _fit(args) -> int:
     _check_outputs(args, files=("--out", "--json", "--checkpoint"))
     _check_model(args)
     args.add = _joined(args.add, "--add")
-    with _user_input("--add: "):
+    with _flag("--add"):
         from realm_ms.sysid.effect_spec import parse_effects
 
         parse_effects(args.add)
-    with _user_input():
-        f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
-                    progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
-                    generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
-                    noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space,
-                    command=args.command)
+    f = api.fit(args.data, args.add, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
+                progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
+                generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
+                noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space,
+                command=args.command)
     print(f"fitted {', '.join(f.effects)} -> {args.out}")
     print("\n".join(f.lines()))
     _write_json(args.json, f.to_json())
@@ -249,11 +243,10 @@ def _auto(args) -> int:
     _check_data(args.data)
     _check_outputs(args, files=("--out", "--json"))
     _check_model(args)
-    with _user_input():
-        a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
-                     progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
-                     generations=args.generations, max_steps=args.max_steps, space=args.space,
-                     command=args.command).to_json()
+    a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
+                 progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
+                 generations=args.generations, max_steps=args.max_steps, space=args.space,
+                 command=args.command).to_json()
     f = a["final"]
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")
@@ -273,10 +266,9 @@ def _report(args) -> int:
     _check_data(args.data)
     _check_outputs(args, files=("--out",))
     _check_model(args)
-    with _user_input():
-        p = api.report(args.data, args.model, args.out, args.heldout, args.seed, args.diagnosis, args.fit,
-                       args.workers, args.device, waterfall=not args.no_waterfall, log=lambda m: print(m, file=sys.stderr),
-                       auto_result=args.auto, command=args.command)
+    p = api.report(args.data, args.model, args.out, args.heldout, args.seed, args.diagnosis, args.fit,
+                   args.workers, args.device, waterfall=not args.no_waterfall, log=lambda m: print(m, file=sys.stderr),
+                   auto_result=args.auto, command=args.command)
     print(f"wrote {p}")
     return 0
 
@@ -289,9 +281,8 @@ def _align(args) -> int:
     _check_data(args.data)
     _check_outputs(args, files=("--out", "--json"))
     _check_model(args)
-    with _user_input():
-        a = api.align(args.data, args.model, args.out, args.command, waterfall=not args.no_waterfall,
-                      log=lambda m: print(m, file=sys.stderr))
+    a = api.align(args.data, args.model, args.out, args.command, waterfall=not args.no_waterfall,
+                  log=lambda m: print(m, file=sys.stderr))
     print(f"{'robot':<40} {'flange mm':>9} {'free mm':>8} {'lag sim':>7} {'b sim':>6}   (real: lag "
           f"{a['runs'][0]['overall']['lag_real']:.1f}, b {a['runs'][0]['overall']['b_real']:.2f})")
     for r in a["runs"]:

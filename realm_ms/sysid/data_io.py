@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms import atomic
 from realm_ms.sysid.timeseries import DataError, Trajectory, validate
 
 NPZ_REQUIRED = ("t", "q")  # + q_cmd (position space) or tau (torque space)
@@ -74,7 +75,6 @@ def _is_text(path: Path) -> bool:
 
 
 def write_npz(path: Path, traj: Trajectory) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
     arrays = {"t": traj.t, "q": traj.q}
     for k in ("q_cmd", "qd", "tau", "gripper", "gripper_cmd"):
         v = getattr(traj, k)
@@ -82,9 +82,7 @@ def write_npz(path: Path, traj: Trajectory) -> None:
             arrays[k] = v
     if traj.control_hz is not None:
         arrays["control_hz"] = np.float64(traj.control_hz)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **arrays)
-    tmp.replace(path)
+    atomic.write_npz(path, **arrays)
 
 
 def _shape(feat) -> list:

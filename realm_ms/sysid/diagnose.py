@@ -32,6 +32,7 @@ import math
 import numpy as np
 
 from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
+from realm_ms.errors import InputError
 from realm_ms.sysid.optimize import Group, LinearStep, copy_effect, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.saturation import PAD_S
@@ -190,7 +191,7 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     names = [n for n in cfg.candidates if n not in present]
     for n in names:
         if n not in EFFECTS:
-            raise ValueError(f"unknown candidate effect {n!r}")
+            raise InputError(f"unknown candidate effect {n!r}")
 
     _log_masked(tr_ss, he_ss, log)
     empty = Group.of(copies())

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from realm_ms.agents.droid_action_spaces import ACTION_SPACES
+from realm_ms.errors import InputError
 from realm_ms.sysid.timeseries import DataError, Trajectory
 
 COMMAND_MODES = ("auto", "logged", "rebuild", "closed_loop")
@@ -135,7 +136,10 @@ def from_columns(cols: dict[str, np.ndarray], name: str, where: str, control_hz:
         if key in TIME_KEYS and t is None:
             t = val
     if "control_hz" in cols:
-        control_hz = float(np.asarray(cols["control_hz"]).reshape(-1)[0])
+        try:
+            control_hz = float(np.asarray(cols["control_hz"]).reshape(-1)[0])
+        except (TypeError, ValueError, IndexError):
+            raise DataError(f"{where}: control_hz must be a number of Hz, got {cols['control_hz']!r}") from None
     if "q" not in meas:
         raise DataError(f"{where}: no measured joint positions; a DROID log needs q (or joint_position, "
                         "observation.joint_position, observation/robot_state/joint_positions), (T, 7) rad")
@@ -387,7 +391,7 @@ def write_log(out: Path, log: DroidLog, fmt: str) -> Path:
                 f[f"action/{s}"] = a
             f["action/gripper_position"] = gcmd
     else:
-        raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
+        raise InputError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
     return path
 
 

@@ -12,6 +12,7 @@ from typing import Literal
 
 from realm_ms.agents.effects import EFFECTS, Effect, effect_class, make_effect
 from realm_ms.agents.robot_model import check_effects
+from realm_ms.errors import InputError
 
 
 def _value(text: str, key: str = "value"):
@@ -23,9 +24,9 @@ def _value(text: str, key: str = "value"):
     try:
         x = float(text)
     except ValueError:
-        raise ValueError(f"{key}={text!r}: expected a number (or true/false)") from None
+        raise InputError(f"{key}={text!r}: expected a number (or true/false)") from None
     if x != x or x in (float("inf"), float("-inf")):
-        raise ValueError(f"{key}={text!r}: expected a finite number")
+        raise InputError(f"{key}={text!r}: expected a finite number")
     return x
 
 
@@ -34,7 +35,7 @@ def split_specs(text: str) -> list[tuple[str, dict[str, str]]]:
     for raw in [t.strip() for t in text.split(",") if t.strip()]:
         if "=" in raw and ":" not in raw:
             if not items:
-                raise ValueError(f"{raw!r}: a parameter needs an effect before it (EFFECT:param=value)")
+                raise InputError(f"{raw!r}: a parameter needs an effect before it (EFFECT:param=value)")
             k, v = raw.split("=", 1)
             items[-1][1][k.strip()] = v.strip()
             continue
@@ -42,7 +43,7 @@ def split_specs(text: str) -> list[tuple[str, dict[str, str]]]:
         kv: dict[str, str] = {}
         if rest:
             if "=" not in rest:
-                raise ValueError(f"{raw!r}: expected EFFECT:param=value")
+                raise InputError(f"{raw!r}: expected EFFECT:param=value")
             k, v = rest.split("=", 1)
             kv[k.strip()] = v.strip()
         items.append((name.strip(), kv))
@@ -59,7 +60,7 @@ def parse_effects(text: str, default_values: Literal["off", "nominal"] = "off") 
         if name.lower() == "none":
             continue
         if name not in EFFECTS:
-            raise ValueError(f"unknown effect {name!r}; known: {', '.join(EFFECTS)}")
+            raise InputError(f"unknown effect {name!r}; known: {', '.join(EFFECTS)}")
         cls = effect_class(name)
         cfg_names = {f.name for f in fields(cls.Config)}
         config = {k: _value(v, k) for k, v in kv.items() if k in cfg_names}
@@ -73,7 +74,7 @@ def parse_effects(text: str, default_values: Literal["off", "nominal"] = "off") 
         try:
             fx.set_values(values)
         except (KeyError, ValueError) as e:
-            raise ValueError(e.args[0] if e.args else str(e)) from None
+            raise InputError(e.args[0] if e.args else str(e)) from None
         out.append(fx)
     check_effects(out, "")  # what a MODEL.yaml's loader checks: fit never writes a file it refuses
     return out

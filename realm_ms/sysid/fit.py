@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from realm_ms.errors import InputError
 from realm_ms.sysid.optimize import Group, GroupScores, cma_fit, confidence_intervals, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
@@ -148,10 +149,10 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     added = parse_effects(cfg.add)
     clash = [fx.name for fx in added if fx.name in model.names]
     if clash:
-        raise ValueError(f"{', '.join(clash)} already in the model (its parameters are refitted anyway); drop it from --add")
+        raise InputError(f"{', '.join(clash)} already in the model (its parameters are refitted anyway); drop it from --add")
     fitted = added + ([fx for fx in model.effects] if cfg.refit else [])
     if not added:
-        raise ValueError("nothing to fit: give effects with --add (see `realm sysid effects`)")
+        raise InputError("nothing to fit: give effects with --add (see `realm sysid effects`)")
     fixed = [fx for fx in model.effects if fx not in fitted]
     ev = evaluator or Evaluator.auto(SimConfig.from_model(model))
     tr_ss = SegmentSet.build(train, model.physics_hz, cfg.segment_s, cfg.burn_in_s, gains=model.gains)

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import hashlib
 import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from realm_ms.agents.urdf import ARM_JOINTS
+from realm_ms.atomic import write_text
 
 if TYPE_CHECKING:
     import numpy as np
@@ -104,11 +104,7 @@ def locked_arm_urdf_path(src: str | Path | None = None) -> Path:
     key = hashlib.sha1(text.encode()).hexdigest()[:12]
     out = _cache_dir() / f"{src.stem}_locked_{key}.urdf"
     if not out.exists():
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=out.parent, suffix=".tmp")
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, out)
+        write_text(out, text)
     return out
 
 

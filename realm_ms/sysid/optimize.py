@@ -18,6 +18,7 @@ import numpy as np
 
 from realm_ms.agents.effects import Effect, make_effect
 from realm_ms.agents.effects.parameter import Param, ParamSet
+from realm_ms.atomic import write_bytes
 from realm_ms.sysid.replay import SegmentSet, score
 
 
@@ -367,9 +368,7 @@ def cma_fit(loss_fn: Callable[[np.ndarray], np.ndarray], u0: np.ndarray, sigma0:
                 bar.update(1)
                 bar.set_postfix(best_rmse=f"{history[-1]['best_loss']:.2e} rad")
             if ckpt:
-                tmp = ckpt.with_suffix(".tmp")
-                tmp.write_bytes(pickle.dumps(state))
-                tmp.replace(ckpt)
+                write_bytes(ckpt, pickle.dumps(state))
             if len(history) > patience:
                 old = history[-1 - patience]["best_loss"]
                 if old - history[-1]["best_loss"] <= tol * old:

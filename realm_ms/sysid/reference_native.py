@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from realm_ms.errors import InputError
 from realm_ms.sysid.reference_friction import PlantFriction
 from realm_ms.sysid.reference_mujoco import URDF_COMPILER, MujocoConfig, MujocoReference
 
@@ -67,12 +68,12 @@ class NativeEffects:
         names = {f.name for f in fields(cls)}
         for item in [s.strip() for s in text.split(",") if s.strip()]:
             if "=" not in item:
-                raise ValueError(f"{item!r}: expected key=value (keys: {', '.join(sorted(names))})")
+                raise InputError(f"{item!r}: expected key=value (keys: {', '.join(sorted(names))})")
             k, v = (x.strip() for x in item.split("=", 1))
             try:
                 x = float(v)
             except ValueError:
-                raise ValueError(f"{k}={v!r}: expected a number") from None
+                raise InputError(f"{k}={v!r}: expected a number") from None
             if k.startswith("payload_com_") and k[-1] in "xyz":
                 com = list(out.payload_com)
                 com["xyz".index(k[-1])] = x
@@ -85,7 +86,7 @@ class NativeEffects:
                 cur[int(k[-1]) - 1] = x
                 setattr(out, k[:-1], tuple(cur))
             else:
-                raise ValueError(f"unknown native effect key {k!r}; known: {', '.join(sorted(names))}, payload_com_x/y/z, "
+                raise InputError(f"unknown native effect key {k!r}; known: {', '.join(sorted(names))}, payload_com_x/y/z, "
                                  "per-joint keys with a joint number 1-7")
         return out
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from realm_ms.errors import InputError
 from realm_ms.sysid.timeseries import Trajectory
 
 
@@ -127,7 +128,7 @@ class SegmentSet:
                 if stop - score_from >= 1 and stop - start >= 2:
                     segs.append(Segment(ti, start, stop, score_from))
         if not segs:
-            raise ValueError("no segment to simulate: trajectories shorter than the burn-in")
+            raise InputError("no segment to simulate: trajectories shorter than the burn-in")
         n = len(segs)
         steps = [int(math.ceil((trajs[s.traj].t[s.stop - 1] - trajs[s.traj].t[s.start]) / dt - 1e-6)) for s in segs]
         n_steps = max(1, max(steps))

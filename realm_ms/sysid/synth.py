@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms.errors import InputError
 from realm_ms.sysid.excite import ExciteConfig, excite
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
@@ -101,7 +102,7 @@ def synth(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None, eval
     n = cfg.n_train + cfg.n_heldout
     commands = excite(n, cfg.seed, ecfg)
     if cfg.engine not in ("physx", "mujoco"):
-        raise ValueError(f"engine must be 'physx' or 'mujoco', got {cfg.engine!r}")
+        raise InputError(f"engine must be 'physx' or 'mujoco', got {cfg.engine!r}")
     if cfg.engine == "mujoco" and evaluator is None:
         evaluator = reference_engine(model)
     sims = simulate_trajectories(model, commands, cfg.control_hz, cfg.rate_hz, evaluator)
@@ -170,7 +171,7 @@ def synth_droid(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None
     check_action_space(action_space, None)
     unknown = [f for f in formats if f not in FORMATS]
     if unknown:
-        raise ValueError(f"unknown format(s) {unknown}; known: {', '.join(FORMATS)}")
+        raise InputError(f"unknown format(s) {unknown}; known: {', '.join(FORMATS)}")
     model = hidden_model(hidden, cfg)
     ecfg = ExciteConfig(**{**asdict(cfg.excite), "duration_s": cfg.duration_s, "control_hz": cfg.control_hz})
     refs = excite(cfg.n_train + cfg.n_heldout, cfg.seed, ecfg)

@@ -1,4 +1,4 @@
-"""The perturbation interface: one class per REALM factor, four small hooks, all batched per sub-env.
+"""The perturbation interface: one class per REALM factor, five small hooks, all batched per sub-env.
 
 A perturbation never mutates anything it was not handed: every episode starts from the pristine
 ``TaskSpec`` (and the pristine masses / light colours recorded at load), so nothing compounds

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from realm_ms.agents.control.presets import FRANKA_EFFORT_LIMITS, ImpedanceGains, JointPhysics, check_lengths
 from realm_ms.agents.urdf import DROID_RESET_QPOS
+from realm_ms.errors import InputError
 
 INTEGRATORS = ("exact", "implicit_damping", "explicit")
 MODEL_RATES = ("path", "physics", "control")
@@ -37,11 +38,11 @@ class DroidControlConfig:
 
     def __post_init__(self):
         if self.integrator not in INTEGRATORS:
-            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {self.integrator!r}")
+            raise InputError(f"integrator must be one of {INTEGRATORS}, got {self.integrator!r}")
         if self.model_rate not in MODEL_RATES:
-            raise ValueError(f"model_rate must be one of {MODEL_RATES}, got {self.model_rate!r}")
+            raise InputError(f"model_rate must be one of {MODEL_RATES}, got {self.model_rate!r}")
         if self.path_steps < 1 or not self.path_tolerance > 0:
-            raise ValueError(f"path_steps must be >= 1 and path_tolerance > 0, got {self.path_steps}, {self.path_tolerance}")
+            raise InputError(f"path_steps must be >= 1 and path_tolerance > 0, got {self.path_steps}, {self.path_tolerance}")
         check_lengths("droid_control", self, {"effort_limits": 7, "drive_damping": 7, "reference_qpos": 7})
 
     @property

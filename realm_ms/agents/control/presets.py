@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import torch
 
+from realm_ms.errors import InputError
+
 FRANKA_EFFORT_LIMITS = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
 
 
@@ -21,9 +23,9 @@ def check_lengths(owner: str, obj, lengths: dict[str, int]) -> None:
         try:
             values = [float(x) for x in v]
         except (TypeError, ValueError):
-            raise ValueError(f"{owner}.{name}: expected a list of {n} numbers, got {v!r}") from None
+            raise InputError(f"{owner}.{name}: expected a list of {n} numbers, got {v!r}") from None
         if len(values) != n or not all(math.isfinite(x) for x in values):
-            raise ValueError(f"{owner}.{name}: expected {n} finite numbers (one per {'joint' if n == 7 else 'axis'}), "
+            raise InputError(f"{owner}.{name}: expected {n} finite numbers (one per {'joint' if n == 7 else 'axis'}), "
                              f"got {len(values)}: {list(v)}")
 
 
@@ -80,7 +82,7 @@ JOINT_PHYSICS_PRESETS: dict[str, JointPhysics] = {
 def resolve(preset_or_value, presets: dict, what: str):
     if isinstance(preset_or_value, str):
         if preset_or_value not in presets:
-            raise ValueError(f"unknown {what} preset {preset_or_value!r}; choose one of {sorted(presets)}")
+            raise InputError(f"unknown {what} preset {preset_or_value!r}; choose one of {sorted(presets)}")
         return presets[preset_or_value]
     return preset_or_value
 

@@ -32,6 +32,7 @@ from realm_ms.agents.effects.stribeck_friction import StribeckFriction
 from realm_ms.agents.effects.target_filter import TargetFilter
 from realm_ms.agents.effects.torque_limit import TorqueLimit
 from realm_ms.agents.effects.viscous_damping import ViscousDamping
+from realm_ms.errors import InputError
 from realm_ms.registry import Registry
 
 EFFECTS: Registry[type[Effect]] = Registry("effect")
@@ -65,7 +66,7 @@ def effect_class(name: str) -> type[Effect]:
     """The effect class registered as ``name``; an unknown name raises ``UnknownNameError`` (a
     ``ValueError``) listing the known ones."""
     if not isinstance(name, str):
-        raise ValueError(f"an effect name must be a string, got {type(name).__name__} {name!r}")
+        raise InputError(f"an effect name must be a string, got {type(name).__name__} {name!r}")
     return EFFECTS.get(name)
 
 

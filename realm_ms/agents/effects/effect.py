@@ -25,6 +25,7 @@ import torch
 
 from realm_ms.agents.actuation import ActuationStage
 from realm_ms.agents.effects.parameter import NUM_JOINTS, Param, ParamSpec, format_value
+from realm_ms.errors import InputError
 
 if TYPE_CHECKING:
     from realm_ms.agents.effects.build_target import BuildTarget
@@ -192,12 +193,12 @@ def _per_joint(key: str, value: Any, n: int) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{key}: expected {want}, got {value!r}") from None
+        raise InputError(f"{key}: expected {want}, got {value!r}") from None
     if arr.ndim > 1 or (arr.ndim == 1 and len(arr) != n and not (n > 1 and len(arr) == 1)):
         got = f"a list of {len(arr)}" if arr.ndim == 1 else f"an array of shape {arr.shape}"
-        raise ValueError(f"{key}: expected {want}, got {got}")
+        raise InputError(f"{key}: expected {want}, got {got}")
     if not np.isfinite(arr).all():
-        raise ValueError(f"{key}: expected finite numbers, got {value!r}")
+        raise InputError(f"{key}: expected finite numbers, got {value!r}")
     return np.array(np.broadcast_to(arr.reshape(-1), (n,)))
 
 

@@ -31,6 +31,7 @@ import torch
 from realm_ms.agents.effects import inertial
 from realm_ms.agents.effects.effect import Effect, EffectConfig
 from realm_ms.agents.effects.parameter import NUM_JOINTS, ParamSpec
+from realm_ms.errors import InputError
 
 COM_KEYS = ("dcx", "dcy", "dcz")
 STRETCH_KEYS = ("ax", "ay", "az")
@@ -67,7 +68,7 @@ class LinkMass(Effect):
     @classmethod
     def param_specs(cls, config):
         if config.link != int(config.link) or not 0 <= config.link <= NUM_JOINTS:
-            raise ValueError(f"link_mass: link must be 0 (all links) or a link number 1..{NUM_JOINTS}, got {config.link}")
+            raise InputError(f"link_mass: link must be 0 (all links) or a link number 1..{NUM_JOINTS}, got {config.link}")
         links = tuple(range(NUM_JOINTS)) if config.link == 0 else (int(config.link) - 1,)
         spec = lambda name, unit, nom, lo, hi, doc, fit=True: ParamSpec(  # noqa: E731
             name, unit, nom, lo, hi, 0.0, doc=doc, fit_by_default=fit, joints=links)

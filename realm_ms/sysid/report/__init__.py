@@ -13,9 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms.atomic import write_text
+from realm_ms.html_kit import sections_page
 from realm_ms.sysid.optimize import Group, evaluate_groups
 from realm_ms.sysid.replay import SegmentSet
-from realm_ms.sysid.report.html import page
 from realm_ms.sysid.report.auto_sections import auto_waterfall, friction_curves
 from realm_ms.sysid.report.sections import SECTIONS, ReportData, Replay
 
@@ -105,9 +106,7 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
         except Exception as e:  # noqa: BLE001 - one failing plot must not lose the whole report
             sections.append((fn.__name__, f"<p class='bad'>section failed: {type(e).__name__}: {e}</p>"))
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(out.suffix + ".tmp")
-    tmp.write_text(page(f"realm sysid report: {data_name}", sections))
-    tmp.replace(out)
+    write_text(out, sections_page(f"realm sysid report: {data_name}", sections))
     return out
 
 

@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms.atomic import write_text
+from realm_ms.html_kit import esc, sections_page, table
 from realm_ms.sysid.report.figures import new, to_img
-from realm_ms.sysid.report.html import esc, page, table
 
 
 @dataclass
@@ -233,7 +234,7 @@ def build_align_report(trajs, labs: dict[str, str], model, model_name: str, out:
     sections.append(("Credit", "<p>Real episodes: DROID (Khazatsky et al., \"DROID: A Large-Scale In-The-Wild Robot "
                                "Manipulation Dataset\", RSS 2024), CC-BY 4.0.</p>"))
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page("DROID alignment: simulated against real", sections))
+    write_text(out, sections_page("DROID alignment: simulated against real", sections))
     doc = {"model": model_name, "seconds": seconds, "skipped": skipped or [],
            "runs": [{"label": r.label, "overall": r.overall.__dict__, "labs": [x.__dict__ for x in r.labs],
                      "free_flange_mm": _med(r.free_mm),

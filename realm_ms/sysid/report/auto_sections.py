@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from realm_ms.html_kit import esc, table
 from realm_ms.sysid.report.figures import new, to_img
-from realm_ms.sysid.report.html import esc, table
 from realm_ms.sysid.report.sections import JOINTS, ReportData
 
 

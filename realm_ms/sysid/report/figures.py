@@ -1,9 +1,8 @@
-"""Matplotlib helpers: figures become base64 PNGs embedded in the page."""
+"""Matplotlib helpers: figures become PNGs embedded in the page (``realm_ms.html_kit``)."""
 
 from __future__ import annotations
 
-import base64
-import io
+from realm_ms.html_kit import img, png
 
 
 def new(rows: int = 1, cols: int = 1, w: float = 11, h: float = 3.0):
@@ -17,11 +16,5 @@ def new(rows: int = 1, cols: int = 1, w: float = 11, h: float = 3.0):
 
 
 def to_img(fig, alt: str = "") -> str:
-    import matplotlib.pyplot as plt
-
-    buf = io.BytesIO()
     fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=80)
-    plt.close(fig)
-    b64 = base64.b64encode(buf.getvalue()).decode()
-    return f'<img alt="{alt}" src="data:image/png;base64,{b64}"/>'
+    return img(png(fig, dpi=80), alt)

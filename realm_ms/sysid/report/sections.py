@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.effects.parameter import format_value
+from realm_ms.html_kit import esc, table
 from realm_ms.sysid.report.figures import new, to_img
-from realm_ms.sysid.report.html import esc, table
 from realm_ms.sysid.saturation import PAD_S
 
 JOINTS = [f"J{i}" for i in range(1, 8)]

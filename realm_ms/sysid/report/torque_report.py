@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms.atomic import write_text
+from realm_ms.html_kit import esc, sections_page, table
 from realm_ms.sysid.report.figures import new, to_img
-from realm_ms.sysid.report.html import esc, page, table
 from realm_ms.sysid.report.sections import JOINTS
 
 UNIT = "N·m"
@@ -101,7 +102,5 @@ def build_torque_report(train, held, model, out: Path, data_name: str = "", auto
             "trajectories with measured joint torque; the model is compared on the inverse-dynamics residual.</p>")
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(out.suffix + ".tmp")
-    tmp.write_text(page(f"realm sysid report (torque space): {data_name}", [head] + sections))
-    tmp.replace(out)
+    write_text(out, sections_page(f"realm sysid report (torque space): {data_name}", [head] + sections))
     return out

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
+from realm_ms.errors import InputError
 from realm_ms.sysid.timeseries import Trajectory, check_torque_rate
 from realm_ms.sysid.torque.smoothing import SmoothingConfig, noise_floor, smooth
 from realm_ms.sysid.torque.terms import TERMS, TRACKING_ONLY, Samples, Series
@@ -43,7 +44,7 @@ class TorqueSet:
         parts, noise_var, weights, dts, series = [], [], [], [], []
         for tr in trajs:
             if tr.tau is None:
-                raise ValueError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
+                raise InputError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
             check_torque_rate(tr)
             sm = smooth(tr.t, tr.q, tr.tau, tr.qd, smoothing)
             dt = float(np.median(np.diff(tr.t)))
@@ -51,7 +52,7 @@ class TorqueSet:
             cut = max(1, int(round(smoothing.window_s / dt)))  # SG extrapolates near the ends
             sl = slice(cut, len(sm.tau) - cut)
             if sl.stop - sl.start < 10:
-                raise ValueError(f"{tr.name}: too short for torque space ({len(tr.t)} samples)")
+                raise InputError(f"{tr.name}: too short for torque space ({len(tr.t)} samples)")
             parts.append((sm.q[sl], sm.qd[sl], sm.qdd[sl], sm.tau[sl]))
             series.append(Series(torch.as_tensor(sm.qd, dtype=torch.float64), dt, sl))
             qt = torch.as_tensor(sm.q[sl][:: max(1, (sl.stop - sl.start) // 200)], dtype=torch.float64)
@@ -93,10 +94,10 @@ class Term:
     def make(cls, name: str, values: dict | None = None, config: dict | None = None) -> "Term":
         """``config``: the effect's settings (e.g. ``{"fit_com": True}`` for link_mass), as a dict."""
         if name in TRACKING_ONLY:
-            raise ValueError(f"{name} acts through the position controller (tracking): it needs `q_cmd` in the data; "
+            raise InputError(f"{name} acts through the position controller (tracking): it needs `q_cmd` in the data; "
                              "in torque space use friction, viscous, armature, payload, gravity or link-mass effects")
         if name not in TERMS:
-            raise ValueError(f"unknown torque-space effect {name!r}; known: {', '.join(TERMS)}")
+            raise InputError(f"unknown torque-space effect {name!r}; known: {', '.join(TERMS)}")
         from realm_ms.agents.effects import make_effect
 
         fx = make_effect(name, None, config)

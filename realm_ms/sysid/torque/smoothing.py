@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from realm_ms.errors import InputError
+
 
 @dataclass(frozen=True)
 class SmoothingConfig:
@@ -71,7 +73,7 @@ def smooth(t: np.ndarray, q: np.ndarray, tau: np.ndarray, qd: np.ndarray | None 
     dt = float(np.median(np.diff(t)))
     w = window(len(t), dt, cfg)
     if w <= cfg.order:
-        raise ValueError(f"too few samples ({len(t)}) for a Savitzky-Golay window of order {cfg.order}")
+        raise InputError(f"too few samples ({len(t)}) for a Savitzky-Golay window of order {cfg.order}")
     if qd is None:
         qd = savgol_filter(q, w, cfg.order, deriv=1, delta=dt, axis=0, mode="interp")
         sigma_qd = np.zeros(q.shape[1])  # already smooth; its noise is inside sigma of q (not tracked)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from realm_ms.errors import InputError
 from realm_ms.sysid.timeseries import Trajectory
 from realm_ms.sysid.torque.residual import UNIT, Term, TorqueSet, fit_terms, residual_bands, rmse, terms_of, torque_arm
 from realm_ms.sysid.torque.terms import TERMS, TRACKING_ONLY
@@ -133,8 +134,8 @@ def parse_terms(spec: str) -> list[Term]:
         kv = {k: v for k, v in kv.items() if k not in cfg_names}
         unknown = [k for k in kv if k not in t.values]
         if unknown:
-            raise ValueError(f"{name}: unknown or fixed parameter(s) {unknown} in torque space; free: {list(t.values)}")
-        t.values.update({k: float(v) for k, v in kv.items()})
+            raise InputError(f"{name}: unknown or fixed parameter(s) {unknown} in torque space; free: {list(t.values)}")
+        t.values.update({k: float(_value(v, k)) for k, v in kv.items()})
         out.append(t)
     return out
 
@@ -262,9 +263,9 @@ class TorqueSpace:
         added = parse_terms(cfg.add)
         clash = [t.name for t in added if t.name in {b.name for b in base_terms}]
         if clash:
-            raise ValueError(f"{', '.join(clash)} already in the model; drop it from --add")
+            raise InputError(f"{', '.join(clash)} already in the model; drop it from --add")
         if not added:
-            raise ValueError("nothing to fit: give effects with --add")
+            raise InputError("nothing to fit: give effects with --add")
         before = _errors(tr, he, base_terms)
         fitted = (base_terms if refit else []) + added
         fit_terms(tr, fitted)

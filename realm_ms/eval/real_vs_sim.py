@@ -176,7 +176,7 @@ def format_table(result: dict) -> str:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("validate", help="real-vs-sim validation: Pearson r, MMRV, RMSD from a paired CSV")
+    p = sub.add_parser("validate", help="real-vs-sim statistics of policy rankings: Pearson r, MMRV, RMSD from a paired CSV")
     p.add_argument("paired", type=Path, help="CSV with columns policy,task,real,sim")
     p.add_argument("--json", type=Path, default=None, help="also write the result as JSON here (a file path)")
     p.add_argument("--percent", action="store_true", help="real/sim are percentages (0-100); default: rates in [0, 1]")
@@ -198,7 +198,8 @@ def run(args) -> int:
         raise UserError(str(e)) from None
     print(format_table(result))
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result, indent=2))
+        from realm_ms.atomic import write_json
+
+        write_json(args.json, result, indent=2)
         print(f"wrote {args.json}")
     return 0
