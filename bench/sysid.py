@@ -67,7 +67,7 @@ def run_auto(args, data: Path, space: str) -> dict:
 
     t0 = time.perf_counter()
     a = api.auto(str(data), workers=args.workers, device="cpu", log=lambda m: print("  " + m, file=sys.stderr),
-                 space=space)
+                 space=space).to_json()
     wall = time.perf_counter() - t0
     r = {"mode": f"auto ({space} space)", "hidden": args.hidden, "wall_s": wall, "unit": a["unit"],
          "nominal": a["nominal_heldout_rmse"], "steps": [(s["effect"], s["heldout_rmse"]) for s in a["steps"]],
@@ -84,9 +84,7 @@ def run_native_sweep(args) -> int:
     logs (t, q, qd, tau) or position logs with the 15 Hz command (q_cmd), both at 1 kHz. Each
     finished case is written at once."""
     from realm_ms.sysid import api
-    from realm_ms.sysid.data_io import load_split
     from realm_ms.sysid.reference_native import VARIANTS, synth_native
-    from realm_ms.sysid.torque import verbs
 
     n_train, n_held, dur = (int(x) for x in args.size.split(","))
     position = args.space == "position"
@@ -102,10 +100,7 @@ def run_native_sweep(args) -> int:
             with tempfile.TemporaryDirectory() as tmp:
                 synth_native(name, Path(tmp), seed=seed, n_train=n_train, n_heldout=n_held, duration_s=float(dur),
                              with_cmd=position)
-                if position:
-                    a = api.auto(tmp, workers=args.workers, device="cpu", log=quiet, space="position")
-                else:
-                    a = verbs.auto(*load_split(Path(tmp)), log=quiet)
+                a = api.auto(tmp, workers=args.workers, device="cpu", log=quiet, space=args.space).to_json()
             f = a["final"]
             floor = a["details"]["judging_floor"]
             row = {"space": args.space, "variant": name, "spec": VARIANTS[name], "seed": seed,
@@ -137,8 +132,9 @@ FRICTION_FITS = ("coulomb_friction", "coulomb_friction,viscous_damping", "stribe
 def run_friction_laws(args) -> int:
     """Torque-space fits of every friction combination on every plant friction law."""
     from realm_ms.sysid.data_io import load_split
+    from realm_ms.sysid.fit import FitConfig
     from realm_ms.sysid.reference_native import synth_native
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     n_train, n_held, dur = (int(x) for x in args.size.split(","))
     out = Path(args.out)
@@ -150,10 +146,10 @@ def run_friction_laws(args) -> int:
                 synth_native(law, Path(tmp), seed=seed, n_train=n_train, n_heldout=n_held, duration_s=float(dur),
                              with_cmd=False)
                 train, held = load_split(Path(tmp))
-            sets = verbs._sets(train, held)
+            space = TorqueSpace(train, held)  # its sample sets are built once, for every fit
             for add in FRICTION_FITS:
                 t0 = time.perf_counter()
-                f = verbs.fit(train, held, add, log=lambda *a: None, sets=sets)
+                f = space.fit(config=FitConfig(add=add), log=lambda *a: None).to_json()
                 floor = f["noise_floor_nm"]
                 row = {"law": law, "seed": seed, "fit": add, "nominal": f["before"]["heldout_rmse_nm"],
                        "after": f["after"]["heldout_rmse_nm"], "floor": floor,

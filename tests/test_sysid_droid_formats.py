@@ -81,8 +81,8 @@ def test_closed_loop_replay_of_the_truth_is_at_the_noise(tmp_path, ev):
     truth = api.compare(data, tmp_path / "truth.yaml", workers=1, device="cpu", command="closed_loop")
     nominal = api.compare(data, None, workers=1, device="cpu", command="closed_loop")
     rebuilt = api.compare(data, tmp_path / "truth.yaml", workers=1, device="cpu", command="rebuild")
-    assert truth["rmse_rad"] < 1.5 * 2e-4 and rebuilt["rmse_rad"] < 1.5 * 2e-4
-    assert nominal["rmse_rad"] > 20 * truth["rmse_rad"]
+    assert truth.rmse < 1.5 * 2e-4 and rebuilt.rmse < 1.5 * 2e-4
+    assert nominal.rmse > 20 * truth.rmse
 
 
 def test_droid_lerobot_port_without_joint_target(tmp_path):

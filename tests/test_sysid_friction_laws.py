@@ -48,10 +48,11 @@ def test_other_friction_laws_fit_within_twice_the_floor_with_coulomb_and_viscous
     """Gaz's sigmoid (smooth, asymmetric, saturating) and LuGre (bristle dynamics) are neither of
     our laws; Coulomb + viscous in torque space still brings the held-out residual within 2x the
     noise floor (a third or less of the nominal residual)."""
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.fit import FitConfig
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     train, held = _data(tmp_path / variant, variant)
-    f = verbs.fit(train, held, "coulomb_friction,viscous_damping", log=lambda *a: None)
+    f = TorqueSpace(train, held).fit(config=FitConfig(add="coulomb_friction,viscous_damping"), log=lambda *a: None).to_json()
     after, before, floor = f["after"]["heldout_rmse_nm"], f["before"]["heldout_rmse_nm"], f["noise_floor_nm"]
     assert before > 3 * floor, (before, floor)
     assert after <= 2 * floor, (after, floor)
@@ -144,6 +145,6 @@ def test_the_true_smooth_friction_replays_a_gaz_plant_in_position_space(tmp_path
     coulomb = {f"fc{j + 1}": p[0] / 2 for j, p in enumerate(GAZ_PHI)}
     r_smooth = compare(held, RobotModel([make_effect("smooth_friction", smooth)]), evaluator=ev)
     r_coulomb = compare(held, RobotModel([make_effect("coulomb_friction", coulomb)]), evaluator=ev)
-    floor = judging_floor(r_smooth["noise_floor_rad"], 2.5e-4)
-    assert r_smooth["rmse_rad"] <= 2 * floor, (r_smooth["rmse_rad"], floor)
-    assert r_coulomb["rmse_rad"] > 2 * r_smooth["rmse_rad"], (r_coulomb["rmse_rad"], r_smooth["rmse_rad"])
+    floor = judging_floor(r_smooth.noise_floor, 2.5e-4)
+    assert r_smooth.rmse <= 2 * floor, (r_smooth.rmse, floor)
+    assert r_coulomb.rmse > 2 * r_smooth.rmse, (r_coulomb.rmse, r_smooth.rmse)

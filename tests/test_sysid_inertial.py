@@ -14,7 +14,7 @@ from realm_ms.agents.effects.payload import payload_pi
 
 
 def _arm():
-    from realm_ms.sysid.torque.space import torque_arm
+    from realm_ms.sysid.torque.residual import torque_arm
 
     return torque_arm()
 

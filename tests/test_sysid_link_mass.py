@@ -28,10 +28,10 @@ def test_link4_mass_is_ranked_first_and_fitted_to_the_floor(link4):
     """Link 4 +30 % mass and inertia (MuJoCo body_mass/body_inertia): link_mass beats the payload
     and gravity-scale explanations, s4 comes back within 0.03 and held-out within 1.5x the floor."""
     from realm_ms.sysid.data_io import load_split
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     train, held = load_split(link4)
-    d = verbs.diagnose(train, held, candidates=("link_mass", "payload", "gravity_comp_error"), log=lambda *a: None)
+    d = TorqueSpace(train, held).diagnose(candidates=("link_mass", "payload", "gravity_comp_error"), log=lambda *a: None).to_json()
     top = d["suspects"][0]
     assert top["effect"] == "link_mass", [(s["effect"], s["heldout_rmse_after_nm"]) for s in d["suspects"]]
     assert top["params"]["s4"] == pytest.approx(0.3, abs=0.03)
@@ -48,19 +48,20 @@ def test_link_centre_of_mass_fits_with_fit_com(link4_com):
     """Link 4 heavier *and* its CoM 4 cm / -3 cm off: mass alone stays above 2x the floor, mass +
     CoM (``link_mass:link=4,fit_com=true``) reaches it and finds the shift."""
     from realm_ms.sysid.data_io import load_split
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.fit import FitConfig
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     train, held = load_split(link4_com)
     quiet = lambda *a: None  # noqa: E731
-    mass_only = verbs.fit(train, held, "link_mass:link=4", log=quiet)
-    with_com = verbs.fit(train, held, "link_mass:link=4,fit_com=true", log=quiet)
+    mass_only = TorqueSpace(train, held).fit(config=FitConfig(add="link_mass:link=4"), log=quiet).to_json()
+    with_com = TorqueSpace(train, held).fit(config=FitConfig(add="link_mass:link=4,fit_com=true"), log=quiet).to_json()
     floor = with_com["noise_floor_nm"]
     assert mass_only["after"]["heldout_rmse_nm"] > 2 * floor
     assert with_com["after"]["heldout_rmse_nm"] <= 2 * floor
     p = with_com["params"]
     # the plant's CoM moved by (0.04, -0.03) m; the fitted mass absorbs part of the first moment
     # (m c), so compare first moments: (1 + s) (c0 + dc) against 1.3 (c0 + shift)
-    from realm_ms.sysid.torque.space import torque_arm
+    from realm_ms.sysid.torque.residual import torque_arm
 
     c0 = torque_arm().coms[3].numpy()
     got = (1 + p["link_mass.s4"]) * (c0 + [p["link_mass.dcx4"], p["link_mass.dcy4"], p["link_mass.dcz4"]])
@@ -71,15 +72,15 @@ def test_auto_finds_a_shifted_link_centre_of_mass(link4_com):
     """Torque-space ``auto`` screens link CoMs too (``link_mass:fit_com=true``, all links): on the
     heavier, off-centre link 4 it takes that step (mass scales alone make held-out worse) and stops
     at the floor with link 4's first moment where the plant's is."""
-    from realm_ms.sysid.auto import AutoConfig
+    from realm_ms.sysid.auto import AutoConfig, auto
     from realm_ms.sysid.data_io import load_split
     from realm_ms.sysid.diagnose import DiagnoseConfig
-    from realm_ms.sysid.torque import verbs
-    from realm_ms.sysid.torque.space import torque_arm
+    from realm_ms.sysid.torque.residual import torque_arm
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     train, held = load_split(link4_com)
     cfg = AutoConfig(diagnose=DiagnoseConfig(candidates=("payload", "gravity_comp_error")))
-    a = verbs.auto(train, held, config=cfg, log=lambda *a: None)
+    a = auto(TorqueSpace(train, held), config=cfg, log=lambda *a: None).to_json()
     assert [s["effect"] for s in a["steps"]] == ["link_mass:fit_com=true"], a["steps"]
     assert a["final"]["verdict"] == "at_floor"
     p = a["steps"][0]["params"]

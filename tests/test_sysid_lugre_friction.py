@@ -74,13 +74,14 @@ def test_the_torque_term_follows_the_velocity_history_and_needs_it():
 def test_lugre_fits_a_lugre_plant_in_torque_space_near_the_floor_and_beats_coulomb(tmp_path):
     from realm_ms.sysid.data_io import load_split
     from realm_ms.sysid.reference_native import synth_native
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.fit import FitConfig
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     synth_native("lugre", tmp_path, seed=0, n_train=2, n_heldout=1, duration_s=4.0, with_cmd=False)
     train, held = load_split(tmp_path)
     quiet = lambda *a: None  # noqa: E731
-    lg = verbs.fit(train, held, "lugre_friction", log=quiet)
-    cv = verbs.fit(train, held, "coulomb_friction,viscous_damping", log=quiet)
+    lg = TorqueSpace(train, held).fit(config=FitConfig(add="lugre_friction"), log=quiet).to_json()
+    cv = TorqueSpace(train, held).fit(config=FitConfig(add="coulomb_friction,viscous_damping"), log=quiet).to_json()
     floor = lg["noise_floor_nm"]
     assert lg["after"]["heldout_rmse_nm"] < 1.25 * floor, (lg["after"], floor)
     assert lg["after"]["heldout_rmse_nm"] < cv["after"]["heldout_rmse_nm"]
@@ -112,9 +113,9 @@ def test_the_true_lugre_replays_a_lugre_plant_in_position_space(tmp_path):
     stribeck = make_effect("stribeck_friction", {"fs": 0.45, "fs4": 0.75, "fs7": 0.3, "fc_ratio": 1 / 1.5, "vs": 0.05})
     r_lugre = compare(held, RobotModel([lugre]), evaluator=ev)
     r_stribeck = compare(held, RobotModel([stribeck, viscous]), evaluator=ev)
-    floor = judging_floor(r_lugre["noise_floor_rad"], 2.5e-4)
-    assert r_lugre["rmse_rad"] <= 1.3 * floor, (r_lugre["rmse_rad"], floor)
-    assert r_stribeck["rmse_rad"] > 1.5 * r_lugre["rmse_rad"], (r_stribeck["rmse_rad"], r_lugre["rmse_rad"])
+    floor = judging_floor(r_lugre.noise_floor, 2.5e-4)
+    assert r_lugre.rmse <= 1.3 * floor, (r_lugre.rmse, floor)
+    assert r_stribeck.rmse > 1.5 * r_lugre.rmse, (r_stribeck.rmse, r_lugre.rmse)
 
 
 def test_the_friction_curve_of_a_lugre_model_is_its_steady_stribeck_curve():

@@ -90,7 +90,7 @@ def test_linearized_step_recovers_a_viscous_coefficient(tmp_path):
     ss = SegmentSet.build(load_dir(tmp_path / "train"), 120.0)
     g = Group.of([make_effect("viscous_damping")])
     out = linearized_step(ev, ss, [], [g], first=True, block=True)[0]
-    assert out["improved"] and out["mse_after"] < 0.05 * out["mse_before"]
+    assert out.improved and out.mse_after < 0.05 * out.mse_before
     vals = g.effects[0].values()
     assert vals["b2"] == pytest.approx(0.8, rel=0.2) and vals["b4"] == pytest.approx(0.8, rel=0.2)
 
@@ -114,7 +114,7 @@ def test_a_zero_mass_payload_reports_its_centre_of_mass_as_insensitive_and_resta
     assert g.effects[0].values()["mass"] == 0.0
     alone = Group.of([make_effect("payload")])
     out = linearized_step(ev, ss, [], [alone], first=True, block=True)[0]
-    keys = [alone.params.params[k].local_key for k in out["insensitive"]]
+    keys = [alone.params.params[k].local_key for k in out.insensitive]
     assert {"com_x", "com_y", "com_z"} <= set(keys) and "mass" not in keys
 
     alt = typical_start(g, {p.key for p in g.effects[0].free_params})
@@ -122,7 +122,7 @@ def test_a_zero_mass_payload_reports_its_centre_of_mass_as_insensitive_and_resta
     assert alt.effects[1].values()["b2"] == pytest.approx(0.3)  # the other effect where it was
     assert g.effects[0].values()["mass"] == 0.0 and alt.effects[0] is not g.effects[0]  # a copy
     out = linearized_step(ev, ss, [], [alt], first=True, block=True)[0]
-    assert not {"com_x", "com_y", "com_z"} & {alt.params.params[k].local_key for k in out["insensitive"]}
+    assert not {"com_x", "com_y", "com_z"} & {alt.params.params[k].local_key for k in out.insensitive}
 
 
 def test_train_and_heldout_run_as_one_rollout_with_the_scores_of_separate_ones(tmp_path):
@@ -151,6 +151,6 @@ def test_train_and_heldout_run_as_one_rollout_with_the_scores_of_separate_ones(t
     for ss, res in zip([tr, he], both):
         # a fresh evaluator: the first one's cache already holds every arm
         (alone,) = evaluate_groups(Evaluator(workers=1, device="cpu"), [ss], [], [g], [pts])
-        np.testing.assert_allclose(res[0][0], alone[0][0], rtol=1e-4)  # mse per candidate
-        np.testing.assert_allclose(res[0][2], alone[0][2], atol=1e-5)  # sampled q (float32 batch neighbours)
-        assert res[0][0][1] < 0.5 * res[0][0][0]  # damping (the hidden effect) helps on both sets
+        np.testing.assert_allclose(res[0].mse, alone[0].mse, rtol=1e-4)  # mse per candidate
+        np.testing.assert_allclose(res[0].sim, alone[0].sim, atol=1e-5)  # sampled q (float32 batch neighbours)
+        assert res[0].mse[1] < 0.5 * res[0].mse[0]  # damping (the hidden effect) helps on both sets

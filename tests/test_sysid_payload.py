@@ -67,7 +67,7 @@ def test_payload_term_with_inertia_matches_a_mujoco_payload_body():
 
     from realm_ms.sysid.reference_mujoco import MujocoConfig, inverse_dynamics
     from realm_ms.sysid.reference_native import NativeEffects, build_native_model
-    from realm_ms.sysid.torque.space import torque_arm
+    from realm_ms.sysid.torque.residual import torque_arm
     from realm_ms.sysid.torque.terms import Samples, payload
 
     fx = NativeEffects(payload_mass=0.8, payload_com=(0.12, -0.03, 0.05), payload_inertia=0.002)
@@ -95,17 +95,18 @@ def test_off_axis_payload_fits_to_the_floor_in_torque_space(tmp_path):
     pytest.importorskip("mujoco")
     from realm_ms.sysid.data_io import load_split
     from realm_ms.sysid.reference_native import synth_native
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.fit import FitConfig
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     synth_native("payload_com", tmp_path, seed=0, n_train=2, n_heldout=1, duration_s=4.0, with_cmd=False)
     train, held = load_split(tmp_path)
     quiet = lambda *a: None  # noqa: E731
-    f = verbs.fit(train, held, "payload", log=quiet)
+    f = TorqueSpace(train, held).fit(config=FitConfig(add="payload"), log=quiet).to_json()
     p = f["params"]
     assert f["after"]["heldout_rmse_nm"] <= 2 * f["noise_floor_nm"], f["after"]
     assert p["payload.mass"] == pytest.approx(0.8, rel=0.05)
     np.testing.assert_allclose([p["payload.com_x"], p["payload.com_y"], p["payload.com_z"]], [0.12, 0.0, 0.05], atol=0.01)
-    fi = verbs.fit(train, held, "payload:fit_inertia=true", log=quiet)
+    fi = TorqueSpace(train, held).fit(config=FitConfig(add="payload:fit_inertia=true"), log=quiet).to_json()
     gyr = [fi["params"][f"payload.gyr_{a}"] for a in "xyz"]
     np.testing.assert_allclose(gyr, np.sqrt(0.002 / 2 / 0.8), rtol=0.2)
     assert fi["after"]["heldout_rmse_nm"] <= f["after"]["heldout_rmse_nm"]

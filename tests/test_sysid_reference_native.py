@@ -34,7 +34,7 @@ def test_a_15_hz_log_holds_the_command_the_plant_tracked(tmp_path):
     for tr, c in zip(train + held, cmds):  # (the last command is never applied: the log ends there)
         np.testing.assert_allclose(tr.q_cmd[:-1], c[: len(tr.t) - 1], atol=1e-9)
     r = _replay(held, [])
-    assert r["rmse_rad"] <= 1.5 * judging_floor(r["noise_floor_rad"], 2.5e-4), r["rmse_rad"]
+    assert r.rmse <= 1.5 * judging_floor(r.noise_floor, 2.5e-4), r.rmse
 
 
 def test_friction_and_an_uncompensated_payload_replay_together_as_well_as_friction_alone(tmp_path):
@@ -51,5 +51,5 @@ def test_friction_and_an_uncompensated_payload_replay_together_as_well_as_fricti
                              ("frictionloss+payload_com", [("coulomb_friction", fc), ("payload", payload)])):
         synth_native(variant, tmp_path / variant, seed=0, n_train=1, n_heldout=1, duration_s=8.0)
         _, held = load_split(tmp_path / variant)
-        rmse[variant] = _replay(held, effects)["rmse_rad"]
+        rmse[variant] = _replay(held, effects).rmse
     assert rmse["frictionloss+payload_com"] <= 1.5 * rmse["frictionloss"], rmse

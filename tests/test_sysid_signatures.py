@@ -29,12 +29,12 @@ def test_noise_floor_of_white_noise_on_smooth_motion():
 def test_evidence_never_divides_by_a_zero_rms():
     """A joint with residual only in holds (move_rms 0) used to read "hold/move rms 300000000.00"."""
     from realm_ms.agents.effects import make_effect
-    from realm_ms.sysid.signatures import Features
+    from realm_ms.sysid.signatures import Features, evidence
 
     z = np.zeros(7)
     rms = np.full(7, 3e-4)
     f = Features(z, z, np.full(7, 0.5), z, z, z, z, z, rms, z, z)
-    text = f.sentence_for(make_effect("armature"), {})
+    text = evidence(make_effect("armature"), {}, f)
     assert "hold/move rms n/a" in text
     f = Features(z, z, z, z, z, z, np.full(7, 1e-4), rms, rms, rms, z)
-    assert "mean/rms 0.33" in f.sentence_for(make_effect("encoder_bias"), {})
+    assert "mean/rms 0.33" in evidence(make_effect("encoder_bias"), {}, f)

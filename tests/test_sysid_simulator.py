@@ -40,9 +40,9 @@ def test_truth_model_replays_noise_free_data_exactly(tmp_path, ev, rate):
     truth = RobotModel.load(tmp_path / "truth.yaml")
     c_true = compare(data, truth, evaluator=ev)
     c_nom = compare(data, RobotModel(), evaluator=ev)
-    assert c_true["rmse_rad"] < 2e-5
-    assert c_nom["rmse_rad"] > 50 * c_true["rmse_rad"]
-    assert len(c_true["per_joint_rmse_rad"]) == 7
+    assert c_true.rmse < 2e-5
+    assert c_nom.rmse > 50 * c_true.rmse
+    assert len(c_true.per_joint_rmse) == 7
 
 
 def test_sleeping_spare_arms_do_not_change_results(ev):

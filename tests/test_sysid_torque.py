@@ -41,7 +41,7 @@ def test_consistent_smoothing_leaves_no_residual_on_clean_data(clean):
     from scipy.signal import savgol_filter
 
     from realm_ms.sysid.data_io import load_dir
-    from realm_ms.sysid.torque.space import TorqueSet, rmse, torque_arm
+    from realm_ms.sysid.torque.residual import TorqueSet, rmse, torque_arm
 
     trajs = load_dir(clean / "heldout")
     arm = torque_arm()
@@ -58,10 +58,10 @@ def test_consistent_smoothing_leaves_no_residual_on_clean_data(clean):
 
 def test_noise_floor_matches_the_null_residual_and_null_is_at_floor(null):
     from realm_ms.sysid.data_io import load_split
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     train, held = load_split(null)
-    d = verbs.diagnose(train, held, candidates=("coulomb_friction", "payload", "armature"), log=lambda *a: None)
+    d = TorqueSpace(train, held).diagnose(candidates=("coulomb_friction", "payload", "armature"), log=lambda *a: None).to_json()
     b = d["baseline"]
     assert 0.7 < b["heldout_rmse_nm"] / b["noise_floor_nm"] < 1.4, b
     assert d["verdict"] == "no_missing_effect" and "no missing effect" in d["message"], d["message"]
@@ -71,11 +71,11 @@ def test_frictionloss_is_found_and_fitted_near_the_floor(friction):
     """MuJoCo's frictionloss (a constraint, exact stiction) is not our smooth law: Coulomb ranks
     first, its level comes back within 15 %, and the fit ends within 2x the floor."""
     from realm_ms.sysid.data_io import load_split
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     train, held = load_split(friction)
-    d = verbs.diagnose(train, held, candidates=("coulomb_friction", "viscous_damping", "armature", "payload"),
-                       log=lambda *a: None)
+    d = TorqueSpace(train, held).diagnose(candidates=("coulomb_friction", "viscous_damping", "armature", "payload"),
+                                          log=lambda *a: None).to_json()
     assert d["suspects"][0]["effect"] == "coulomb_friction", [s["effect"] for s in d["suspects"]]
     fc = [d["suspects"][0]["params"][f"fc{j}"] for j in range(1, 8)]
     np.testing.assert_allclose(fc, 0.3, rtol=0.15)
@@ -86,10 +86,10 @@ def test_narrowed_candidates_name_what_was_left_out(friction):
     """Screening without the friction laws leaves the friction residual: the verdict names the
     library terms not screened (never "no effect in the library"), tracking-only effects excluded."""
     from realm_ms.sysid.data_io import load_split
-    from realm_ms.sysid.torque import verbs
+    from realm_ms.sysid.torque.space import TorqueSpace
 
     train, held = load_split(friction)
-    d = verbs.diagnose(train, held, candidates=("payload", "armature"), log=lambda *a: None)
+    d = TorqueSpace(train, held).diagnose(candidates=("payload", "armature"), log=lambda *a: None).to_json()
     assert d["verdict"] in ("partially_explained", "unexplained"), d["message"]
     note = d["message"].split("not screened here: ", 1)[1]
     assert "coulomb_friction" in note and "link_mass" in note and "latency" not in note and "payload" not in note
@@ -140,7 +140,7 @@ def test_payload_term_matches_a_mujoco_payload_body():
     from realm_ms.agents.effects import make_effect
     from realm_ms.sysid.reference_mujoco import MujocoConfig, inverse_dynamics
     from realm_ms.sysid.reference_native import NativeEffects, build_native_model
-    from realm_ms.sysid.torque.space import torque_arm
+    from realm_ms.sysid.torque.residual import torque_arm
     from realm_ms.sysid.torque.terms import Samples, payload
 
     fx = NativeEffects(payload_mass=0.8, payload_com=(0.12, -0.03, 0.05))

@@ -49,7 +49,8 @@ def test_unexplained_when_nothing_helps_far_above_the_floor():
 
 
 def test_torque_space_has_no_replay_floor():
-    v, msg, floor = judge_verdict(0.28, 0.073, [_s("coulomb_friction", 0.28, 0.105)], CFG, unit="N·m")
+    v, msg, floor = judge_verdict(0.28, 0.073, [_s("coulomb_friction", 0.28, 0.105)], CFG, unit="N·m",
+                                  replay_floor=0.0)
     assert floor == pytest.approx(0.073) and v == "found" and "N·m" in msg
 
 
@@ -58,7 +59,7 @@ def test_a_zero_floor_is_never_divided(after):
     """Noise-free torque data has a floor of 0: no "6.8e29x the floor" in any message."""
     from realm_ms.sysid.auto import AutoStep, _message
 
-    v, msg, floor = judge_verdict(1.0, 0.0, [_s("coulomb_friction", 1.0, after)], CFG, unit="N·m")
+    v, msg, floor = judge_verdict(1.0, 0.0, [_s("coulomb_friction", 1.0, after)], CFG, unit="N·m", replay_floor=0.0)
     assert floor == 0 and v in ("partially_explained", "unexplained")
     assert "x the floor" not in msg and "floor of 0 N·m: noise-free data, no ratio" in msg
     for verdict in ("partially_explained", "unexplained"):
@@ -91,7 +92,7 @@ def test_auto_start_spec_falls_back_to_the_bare_name():
 
 
 @pytest.mark.parametrize("coulomb_after,lugre_after", [(0.53e-3, 0.6e-3), (0.3e-3, 0.6e-3), (0.53e-3, 0.35e-3)])
-def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeypatch, coulomb_after, lugre_after):
+def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb_after, lugre_after):
     """The screening ranks Coulomb first and cannot tell smooth friction from it: both are fitted in
     full and the one with the lower held-out error is kept; a suspect that is no look-alike waits
     for the next round. A top suspect that reaches the floor (1.5 x 0.27 mrad) ends the round. When
@@ -105,26 +106,40 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(monkeyp
     held_after = {"coulomb_friction": coulomb_after, "smooth_friction": 0.47e-3, "latency": 0.52e-3,
                   "lugre_friction": lugre_after}
     rounds = []
-
-    def diagnose(train, held, model, cfg, evaluator, log):
-        rounds.append(model)
-        sus = [] if len(rounds) > 1 else [_s("coulomb_friction", 5.6e-3, 0.6e-3), _s("smooth_friction", 5.6e-3, 0.7e-3),
-                                          _s("latency", 5.6e-3, 0.8e-3)]
-        if sus:
-            sus[0].confounded_with = ["smooth_friction"]
-        return SimpleNamespace(baseline_heldout_rmse=5.6e-3, noise_floor=1e-4, saturated_fraction=0.0,
-                               suspects=sus, verdict="partially_explained")
-
     fitted = []
 
-    def fit(train, held, model, config, evaluator, progress, log):
-        name = config.add.split(":")[0]
-        fitted.append(name)
-        return SimpleNamespace(after={"heldout_rmse_rad": held_after[name]}, params={f"{name}.x": 1.0}, model=RobotModel())
+    class Space:  # a position-like space whose diagnosis and fits are scripted
+        unit = "rad"
 
-    monkeypatch.setattr(auto_mod, "diagnose", diagnose)
-    monkeypatch.setattr(auto_mod, "fit", fit)
-    out = auto_mod.auto([], [], progress=False, log=lambda *a: None)
+        def replay_floor(self, cfg):
+            return cfg.replay_floor_rad
+
+        def screened(self, cfg):
+            return list(cfg.candidates)
+
+        def library(self):
+            from realm_ms.agents.effects import EFFECTS
+
+            return list(EFFECTS)
+
+        def diagnose(self, model, cfg, log):
+            rounds.append(model)
+            sus = [] if len(rounds) > 1 else [_s("coulomb_friction", 5.6e-3, 0.6e-3), _s("smooth_friction", 5.6e-3, 0.7e-3),
+                                              _s("latency", 5.6e-3, 0.8e-3)]
+            if sus:
+                sus[0].confounded_with = ["smooth_friction"]
+            return SimpleNamespace(baseline_heldout_rmse=5.6e-3, noise_floor=1e-4, saturated_fraction=0.0,
+                                   suspects=sus, verdict="partially_explained")
+
+        def fit_suspect(self, model, suspect, config, log):
+            fitted.append(suspect.effect)
+            return SimpleNamespace(heldout_after=held_after[suspect.effect], params={f"{suspect.effect}.x": 1.0},
+                                   model=RobotModel())
+
+        def details(self, diagnosis, model):
+            return {}, ""
+
+    out = auto_mod.auto(Space(), progress=False, log=lambda *a: None).to_json()
     if coulomb_after < 0.4e-3:
         assert fitted == ["coulomb_friction"] and [s["effect"] for s in out["steps"]] == ["coulomb_friction"]
         return
@@ -185,3 +200,21 @@ def test_diagnose_names_the_library_effects_it_did_not_screen():
     assert v == "found" and "not screened" not in msg
     v, msg, _ = judge_verdict(0.2e-3, 0.1e-3, [], CFG, left_out=left)
     assert v == "no_missing_effect" and "not screened" not in msg
+
+
+def test_contenders_leave_out_look_alikes_the_space_cannot_model():
+    """Torque space has no latency (a tracking effect): auto must not queue it as a look-alike of
+    viscous damping there, as it does in position space."""
+    from realm_ms.sysid.auto import contenders
+
+    top = _s("viscous_damping", 5e-3, 1e-3)
+    assert "latency" in [c.effect for c in contenders([top], ("viscous_damping",), set())]
+    torque_like = ["viscous_damping", "coulomb_friction"]
+    assert "latency" not in [c.effect for c in contenders([top], ("viscous_damping",), set(), torque_like)]
+
+
+def test_auto_message_uses_the_configured_found_factor_and_unit():
+    from realm_ms.sysid.auto import _message
+
+    msg = _message("at_floor", 1e-1, 0.5, 0.3, [], found_factor=2.0, unit="N·m")
+    assert "<= 2x 3.00e-01 N·m" in msg and "1.5x" not in msg and " rad" not in msg

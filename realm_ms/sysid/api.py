@@ -2,12 +2,13 @@
 
     from realm_ms.sysid import api
     api.synth("coulomb_friction:fc=0.3", "data/", seed=0)
-    d = api.diagnose("data/")                      # dict, the documented JSON
-    f = api.fit("data/", add="coulomb_friction", out="MODEL.yaml")
+    d = api.diagnose("data/")                      # a Diagnosis; d.to_json() is the documented JSON
+    f = api.fit("data/", add="coulomb_friction", out="MODEL.yaml")  # f.model is the fitted model
     api.report("data/", model="MODEL.yaml", out="report.html")
 
 Every function takes DATA as a path (npz directory or LeRobot v3.0 dataset) or as
-(train, heldout) lists of :class:`~realm_ms.sysid.timeseries.Trajectory`.
+(train, heldout) lists of :class:`~realm_ms.sysid.timeseries.Trajectory`. ``space`` (``--space``)
+is picked once per call (``_make_space``); the verbs return the space's typed results.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from realm_ms.sysid.timeseries import MIN_SAMPLES, DataError, Trajectory
-from realm_ms.validate import InputError, check_device, check_int, check_non_negative, check_positive
+from realm_ms.validate import InputError, check_int, check_non_negative, check_positive
 
 #: shortest synthetic trajectory the other verbs accept: 1 s burn-in plus at least 1 s scored
 MIN_SYNTH_DURATION_S = 2.0
@@ -39,55 +40,48 @@ def _split(data, heldout=None, seed: int = 0, heldout_fraction: float = 0.3,
     return load_split(data, heldout, seed, heldout_fraction, _read_options(command))
 
 
-def _space(trajs: list[Trajectory], space: str | None) -> str:
-    """``position`` (replay of q_cmd under the DROID controller) or ``torque`` (inverse-dynamics
-    residual of a torque log). Default: torque when the data has no q_cmd, else position."""
-    space = space or "auto"
-    if space not in ("auto", "position", "torque"):
-        raise InputError(f"space (--space): unknown space {space!r}; use position, torque or auto")
-    no_cmd = [t.name for t in trajs if t.q_cmd is None]
-    no_tau = [t.name for t in trajs if t.tau is None]
-    if space == "auto":
-        space = "torque" if no_cmd else "position"
-    if space == "position" and no_cmd:
-        raise DataError(f"{no_cmd[0]}: no q_cmd (commanded targets); the position-space replay needs them. "
-                        + ("It has tau: use --space torque (the inverse-dynamics residual)" if not no_tau else
-                           "Add q_cmd, or tau for torque-space work"))
-    if space == "torque" and no_tau:
-        raise DataError(f"{no_tau[0]}: no tau (measured joint torque, N·m); torque space needs it "
-                        + ("(or use --space position: the data has q_cmd)" if not no_cmd else "in every trajectory"))
-    return space
-
-
-def _checked_space(trajs: list[Trajectory], space: str | None) -> str:
-    """``_space``, for the verbs that reach a verdict or fit: data with nothing to identify is refused."""
+def _make_space(train, held, space: str | None, model, workers=None, device=None, progress: bool = True,
+                identify: bool = True):
+    """The one place a space is picked and built, for ``--space`` (``position``: replay of q_cmd under
+    the DROID controller; ``torque``: inverse-dynamics residual of a torque log; default ``auto``: the
+    first space in ``SPACES`` the data has what it needs for, i.e. torque when the data has no q_cmd),
+    checked against the data. ``identify``: also refuse data with nothing to identify (the verbs
+    that reach a verdict or fit)."""
+    from realm_ms.sysid.space import SPACES
     from realm_ms.sysid.timeseries import check_identifiable
 
-    space = _space(trajs, space)
-    check_identifiable(trajs, space)
-    return space
+    trajs = train + held
+    space = space or "auto"
+    if space != "auto" and space not in SPACES:
+        raise InputError(f"space (--space): unknown space {space!r}; use {', '.join(SPACES)} or auto")
+    cls = SPACES[space] if space in SPACES else next((c for c in SPACES.values() if c.suits(trajs)), list(SPACES.values())[-1])
+    cls.check(trajs)
+    if identify:
+        check_identifiable(trajs)
+        cls.check_identifiable(trajs)
+    return cls.build(train, held, model, workers, device, progress)
+
+
+def _split_block(train, held, seed: int) -> dict:
+    return {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
+
+
+def _provenance(data, space, train, held, fitted: list[str], heldout_rmse: float) -> dict:
+    """What a saved MODEL.yaml records about the fit that made it."""
+    from datetime import datetime, timezone
+
+    from realm_ms.sysid.diagnose import UNIT_KEYS
+
+    return {"data": str(data) if not isinstance(data, tuple) else "in-memory", "space": space.name,
+            "train": [t.name for t in train], "heldout": [t.name for t in held],
+            "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "fitted": fitted, f"heldout_rmse_{UNIT_KEYS[space.unit]}": heldout_rmse, **_versions()}
 
 
 def _model(model):
     from realm_ms.agents.robot_model import RobotModel
 
     return RobotModel.load(model)
-
-
-def _evaluator(model, workers=None, device=None, progress: bool = True):
-    import sys
-
-    if workers is not None:
-        workers = check_int(workers, "workers (--workers)", minimum=1)
-    if device is not None:
-        check_device(device)
-
-    from realm_ms.sysid.engine import Evaluator
-    from realm_ms.sysid.simulator import SimConfig
-
-    ev = Evaluator.auto(SimConfig.from_model(model), workers, device)
-    ev.progress = progress and sys.stderr.isatty()
-    return ev
 
 
 def effects() -> list[dict[str, Any]]:
@@ -156,10 +150,10 @@ def synth_droid(hidden: str, out: str | Path, action_space: str = "cartesian_pos
 
 
 def compare(data, model=None, heldout=None, workers=None, device=None, segment_s: float = 8.0,
-            space: str | None = None, command: str | None = None) -> dict:
-    """Replay DATA (all trajectories; plus ``heldout`` if given) with the model."""
+            space: str | None = None, command: str | None = None):
+    """Replay DATA (all trajectories; plus ``heldout`` if given) with the model: a ``CompareResult``
+    (position space, ``fit.py``) or ``TorqueCompare`` (``torque/space.py``); ``.to_json()`` is the JSON."""
     from realm_ms.sysid.data_io import load_dir
-    from realm_ms.sysid.fit import compare as _compare
 
     check_positive(segment_s, "segment_s (--segment)", "s")
     m = _model(model)
@@ -167,40 +161,28 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
     trajs = data if isinstance(data, list) else load_dir(data, options=opts)
     if heldout is not None:
         trajs = trajs + load_dir(heldout, options=opts)
-    if _space(trajs, space) == "torque":
-        from realm_ms.sysid.torque import verbs
-
-        return verbs.compare(trajs, m)
-    out = _compare(trajs, m, segment_s=segment_s, evaluator=_evaluator(m, workers, device))
-    out["unit"] = "rad"
-    return out
+    sp = _make_space(trajs, [], space, m, workers, device, identify=False)
+    return sp.compare(m, segment_s=segment_s)
 
 
 def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print,
-             space: str | None = None, command: str | None = None, **config) -> dict:
-    from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose as _diagnose
+             space: str | None = None, command: str | None = None, candidates=None, **config):
+    """The ranked suspects: a ``diagnose.Diagnosis`` (``.to_json()`` is the documented JSON)."""
+    from realm_ms.sysid.diagnose import DiagnoseConfig
 
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    if _checked_space(train + held, space) == "torque":
-        from realm_ms.sysid.torque import verbs
-
-        cands = config.pop("candidates", None)
-        out = verbs.diagnose(train, held, m, cands, DiagnoseConfig(**config), log=log)
-        out["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
-        return out
-    d = _diagnose(train, held, m, DiagnoseConfig(**config), _evaluator(m, workers, device), log=log)
-    out = d.to_json()
-    out["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
-    return out
+    sp = _make_space(train, held, space, m, workers, device)
+    d = sp.diagnose(m, DiagnoseConfig(**config), log=log, candidates=candidates)
+    d.split = _split_block(train, held, seed)
+    return d
 
 
 def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None,
         device=None, progress: bool = True, log=print, space: str | None = None, command: str | None = None,
-        **config) -> dict:
-    from datetime import datetime, timezone
-
-    from realm_ms.sysid.fit import FitConfig, fit as _fit
+        **config):
+    """Add effects and fit: a ``fit.FitResult`` (position) or ``TorqueFit``; ``.model`` is saved at ``out``."""
+    from realm_ms.sysid.fit import FitConfig
     from realm_ms.validate import check_output_file
 
     if config.get("popsize") is not None:
@@ -215,38 +197,18 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    if _checked_space(train + held, space) == "torque":
-        from realm_ms.sysid.torque import verbs
-
-        j = verbs.fit(train, held, add, m, refit=config.get("refit", True), log=log)
-        j["_model"].provenance.update({"data": str(data) if not isinstance(data, tuple) else "in-memory",
-                                       "space": "torque", "fitted": j["effects"], **_versions()})
-        if out is not None:
-            j["_model"].save(out)
-        j.pop("_terms", None)
-        j["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
-        return j
-    res = _fit(train, held, m, FitConfig(add=add, seed=seed, **config), _evaluator(m, workers, device), progress, log)
-    res.model.provenance.update({
-        "data": str(data) if not isinstance(data, tuple) else "in-memory",
-        "train": [t.name for t in train], "heldout": [t.name for t in held],
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "fitted": res.effects, "heldout_rmse_rad": res.after["heldout_rmse_rad"],
-        **_versions(),
-    })
+    sp = _make_space(train, held, space, m, workers, device, progress)
+    res = sp.fit(m, FitConfig(add=add, seed=seed, **config), log=log)
+    res.model.provenance.update(_provenance(data, sp, train, held, res.effects, res.heldout_after))
     if out is not None:
         res.model.save(out)
-    j = res.to_json()
-    j["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
-    j["_model"] = res.model
-    return j
+    res.split = _split_block(train, held, seed)
+    return res
 
 
 def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None, device=None,
-         progress: bool = True, log=print, space: str | None = None, command: str | None = None, **config) -> dict:
-    """diagnose -> fit the top suspect -> re-diagnose ... until the floor (``sysid/auto.py``)."""
-    from datetime import datetime, timezone
-
+         progress: bool = True, log=print, space: str | None = None, command: str | None = None, **config):
+    """diagnose -> fit the top suspect -> re-diagnose ... until the floor (``sysid/auto.py``): an ``AutoResult``."""
     from realm_ms.sysid.auto import AutoConfig, auto as _auto
     from realm_ms.validate import check_output_file
 
@@ -257,45 +219,28 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
         check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    if _checked_space(train + held, space) == "torque":
-        from realm_ms.sysid.torque import verbs
-
-        res = verbs.auto(train, held, m, AutoConfig(seed=seed, **config), log)
-    else:
-        res = _auto(train, held, m, AutoConfig(seed=seed, **config), _evaluator(m, workers, device), progress, log)
-    fitted = res["_model"]
-    fitted.provenance.update({
-        "data": str(data) if not isinstance(data, tuple) else "in-memory",
-        "train": [t.name for t in train], "heldout": [t.name for t in held],
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "fitted": [s["effect"] for s in res["steps"]], "heldout_rmse_rad": res["final"]["heldout_rmse"],
-        **_versions(),
-    })
+    sp = _make_space(train, held, space, m, workers, device, progress)
+    res = _auto(sp, m, AutoConfig(seed=seed, **config), progress, log)
+    res.model.provenance.update(_provenance(data, sp, train, held, [s.effect for s in res.steps], res.heldout_rmse))
     if out is not None:
-        fitted.save(out)
-    res["split"] = {"train": [t.name for t in train], "heldout": [t.name for t in held], "seed": seed}
+        res.model.save(out)
+    res.split = _split_block(train, held, seed)
     return res
 
 
 def report(data, model=None, out: str | Path = "report.html", heldout=None, seed: int = 0, diagnosis=None,
            fit_result=None, workers=None, device=None, waterfall: bool = True, log=print, auto_result=None,
-           command: str | None = None) -> Path:
-    from realm_ms.sysid.report import build_report
+           command: str | None = None, space: str | None = None) -> Path:
     from realm_ms.validate import check_output_file
 
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    if _checked_space(train + held, None) == "torque":  # no q_cmd: the inverse-dynamics residual, in N·m
-        from realm_ms.sysid.report.torque_report import build_torque_report
-
-        auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")
-        return build_torque_report(train, held, m if model is not None else None, Path(out), str(data), auto_result)
-    diagnosis = _load_json(diagnosis, ("baseline", "suspects"), "diagnose --json")
-    fit_result = _load_json(fit_result, ("history", "before", "after"), "fit --json")
-    auto_result = _load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json")
-    return build_report(train, held, m, Path(out), _evaluator(m, workers, device), diagnosis=diagnosis,
-                        fit_result=fit_result, waterfall=waterfall, data_name=str(data), log=log, auto=auto_result)
+    sp = _make_space(train, held, space, m, workers, device)
+    return sp.report(m if model is not None else None, Path(out), str(data), log=log, waterfall=waterfall,
+                     diagnosis=_load_json(diagnosis, ("baseline", "suspects"), "diagnose --json"),
+                     fit_result=_load_json(fit_result, ("history", "before", "after"), "fit --json"),
+                     auto=_load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json"))
 
 
 def align(data, model=None, out: str | Path = "align.html", command: str | None = None, waterfall: bool = True,
@@ -317,6 +262,9 @@ def align(data, model=None, out: str | Path = "align.html", command: str | None 
 
 
 def _load_json(obj, keys: tuple[str, ...], what: str):
+    """A verb's JSON: from a file, from its typed result (``.to_json()``), or as given (a dict or None)."""
+    if hasattr(obj, "to_json"):
+        return obj.to_json()
     if not isinstance(obj, (str, Path)):
         return obj
     p = Path(obj)

@@ -1,5 +1,6 @@
 """``realm sysid auto``: diagnose -> fit the top suspect -> re-diagnose from the fitted model -> ...
 
+One loop for both spaces (``space.py``; the space diagnoses, fits a suspect and names its unit).
 Each round ranks the effects still missing from the current model (``diagnose``, screening
 with the model's own parameters re-tuned), fits the best suspect jointly with everything already
 kept (``fit`` with refit, started at the screened values) -- and each look-alike the diagnosis could
@@ -23,9 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.agents.robot_model import RobotModel
-from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, diagnose, judging_floor, times_floor, unscreened, unscreened_note
-from realm_ms.sysid.fit import FitConfig, fit
-from realm_ms.sysid.timeseries import Trajectory
+from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judging_floor, times_floor, unscreened, unscreened_note
 
 #: velocity grid of the reported friction curve: +-0.05 ... 1.5 rad/s
 FRICTION_QD = np.concatenate([-np.linspace(1.5, 0.05, 30), np.linspace(0.05, 1.5, 30)])
@@ -55,19 +54,21 @@ class AutoStep:
         return {"effect": self.effect, "params": self.params, "heldout_rmse": self.heldout_rmse}
 
 
-def contenders(cands: list, screened: tuple[str, ...], tried: set[str]) -> list:
+def contenders(cands: list, screened, tried: set[str], library=None) -> list:
     """The top suspect and the look-alikes the diagnosis could not tell from it (``confounded_with``,
     among the remaining candidates): its screening ranks them on a short re-tune, so each is fitted
     in full and the data decide (on MuJoCo's ``frictionloss`` the screening ranks Coulomb first, and
     the full fits give smooth friction 0.47 mrad against Coulomb's 0.53). Last, the top suspect's
-    look-alikes the screening leaves out (not in ``screened``: LuGre friction, too costly to screen),
-    from their typical values; the caller stops at the first contender that reaches the floor."""
+    look-alikes the screening leaves out (not in ``screened``: LuGre friction, too costly to screen)
+    but the space can model (``library``, default every effect), from their typical values; the
+    caller stops at the first contender that reaches the floor."""
     from realm_ms.agents.effects import confounded_with
 
     top = cands[0]
     out = [top] + [c for c in cands[1:] if c.effect in top.confounded_with]
     for name in confounded_with(top.effect):
-        if name not in screened and name not in tried and all(c.effect != name for c in out):
+        if (name not in screened and name not in tried and all(c.effect != name for c in out)
+                and (library is None or name in library)):
             out.append(Suspect(name, 0.0, float("nan"), float("nan"), {},
                                f"a look-alike of {top.effect} that diagnose does not screen"))
     return out
@@ -104,90 +105,111 @@ def friction_curve(model: RobotModel, qd: np.ndarray = FRICTION_QD) -> dict:
     return {"qd": [round(float(x), 6) for x in qd], "tau": [[round(float(x), 6) for x in row] for row in tau.numpy()]}
 
 
-def auto(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | None = None,
-         config: AutoConfig | None = None, evaluator=None, progress: bool = True, log=print) -> dict:
-    """The loop; returns the documented JSON (``docs/sysid.md``) plus ``_model`` (the final model)."""
+@dataclass
+class AutoResult:
+    """What ``auto`` found: the kept steps, the final error and verdict, and the final model."""
+
+    unit: str
+    nominal_heldout_rmse: float
+    steps: list[AutoStep]  # kept, in order
+    rejected: list[AutoStep]
+    heldout_rmse: float
+    noise_floor: float
+    judging_floor: float
+    found_factor: float
+    verdict: str  # at_floor | partially_explained | unexplained
+    message: str
+    model: RobotModel
+    details: dict = field(default_factory=dict)  # the space's own (``Space.details``)
+    split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
+
+    def to_json(self) -> dict:
+        out = {"unit": self.unit, "nominal_heldout_rmse": self.nominal_heldout_rmse,
+               "steps": [s.to_json() for s in self.steps],
+               "final": {"heldout_rmse": self.heldout_rmse, "noise_floor": self.noise_floor, "verdict": self.verdict},
+               "friction_curve": friction_curve(self.model),
+               "details": {"judging_floor": self.judging_floor, "found_factor": self.found_factor, **self.details,
+                           "rejected": [{"effect": s.effect, "heldout_rmse": s.heldout_rmse} for s in self.rejected],
+                           "at_bounds": self.model.params_at_bounds(), "message": self.message}}
+        if self.split is not None:
+            out["split"] = self.split
+        return out
+
+
+def auto(space, model: RobotModel | None = None, config: AutoConfig | None = None, progress: bool = True,
+         log=print) -> AutoResult:
+    """The loop over a space (``space.py``: position or torque)."""
     cfg = config or AutoConfig()
+    dcfg = cfg.diagnose
+    unit = space.unit
     model = (model or RobotModel()).copy()
     quiet = lambda *a: None  # noqa: E731
     bar = _bar(progress, cfg.max_fits)
-    d = diagnose(train, heldout, model, cfg.diagnose, evaluator, log=quiet)
+    d = space.diagnose(model, dcfg, log=quiet)
     nominal = float(d.baseline_heldout_rmse)
     noise = float(d.noise_floor)
     current = nominal
-    floor = judging_floor(noise, cfg.diagnose.replay_floor_rad)
-    log(f"auto: nominal held-out RMSE {nominal:.3e} rad, judging floor {floor:.2e} rad ({d.verdict})")
+    floor = judging_floor(noise, space.replay_floor(dcfg))
+    log(f"auto: nominal held-out RMSE {nominal:.3e} {unit}, judging floor {floor:.2e} {unit} ({d.verdict})")
     if d.saturated_fraction:
         log(f"auto: {d.saturated_fraction:.1%} of the held-out samples lie in torque-saturated bursts: simulated, not scored")
     steps: list[AutoStep] = []
     tried: set[str] = set()
+    screened = space.screened(dcfg)
     fits = 0
     while (len([s for s in steps if s.kept]) < cfg.max_steps and fits < cfg.max_fits
-           and current > cfg.diagnose.found_factor * floor):
-        cands = [s for s in d.suspects if s.score >= cfg.diagnose.min_improvement and s.effect not in tried]
+           and current > dcfg.found_factor * floor):
+        cands = [s for s in d.suspects if s.score >= dcfg.min_improvement and s.effect not in tried]
         if not cands:
             log("auto: no remaining suspect helps")
             break
         fitted = []
-        for sus in contenders(cands, cfg.diagnose.candidates, tried)[: cfg.max_fits - fits]:
+        for sus in contenders(cands, screened, tried, space.library())[: cfg.max_fits - fits]:
             tried.add(sus.effect)
             fits += 1
             bar.set_description(f"auto: fitting {sus.effect}")
-            # the loop reports values and held-out errors, not intervals: no uncertainty batch
-            f = fit(train, heldout, model, FitConfig(add=_start_spec(sus.effect, sus.params), generations=cfg.generations,
-                                                     popsize=cfg.popsize, seed=cfg.seed, uncertainty=False), evaluator,
-                    progress=False, log=quiet)
+            f = space.fit_suspect(model, sus, cfg, log=quiet)
             bar.update(1)
-            fitted.append((float(f.after["heldout_rmse_rad"]), sus, f))
-            if fitted[-1][0] <= cfg.diagnose.found_factor * floor:
+            fitted.append((f.heldout_after, sus, f))
+            if fitted[-1][0] <= dcfg.found_factor * floor:
                 break  # at the floor: no look-alike can do visibly better
         if len(fitted) > 1:
             fitted.sort(key=lambda x: x[0])
             for after, sus, _ in fitted[1:]:
                 steps.append(AutoStep(sus.effect, {}, after, False, d.verdict))
-                log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} rad (a look-alike of "
+                log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} {unit} (a look-alike of "
                     f"{fitted[0][1].effect}, which fits better)")
         after, sus, f = fitted[0]
         kept = current - after >= max(cfg.min_gain * current, cfg.min_floor_drop * floor)
         params = {k: round(float(v), 9) for k, v in f.params.items()}
-        step = AutoStep(sus.effect, params, after, kept, d.verdict)
-        steps.append(step)
-        log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} rad "
+        steps.append(AutoStep(sus.effect, params, after, kept, d.verdict))
+        log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} {unit} "
             + ("(kept)" if kept else "(rejected: within what noise allows)"))
         if not kept:
             continue
         model, current = f.model, after
-        if current <= cfg.diagnose.found_factor * floor or len([s for s in steps if s.kept]) >= cfg.max_steps:
+        if current <= dcfg.found_factor * floor or len([s for s in steps if s.kept]) >= cfg.max_steps:
             break
         bar.set_description("auto: diagnosing")
-        d = diagnose(train, heldout, model, cfg.diagnose, evaluator, log=quiet)
+        d = space.diagnose(model, dcfg, log=quiet)
         noise = min(noise, float(d.noise_floor))  # the estimate is inflated by model error: keep the lowest
-        floor = judging_floor(noise, cfg.diagnose.replay_floor_rad)
+        floor = judging_floor(noise, space.replay_floor(dcfg))
     bar.close()
     kept = [s for s in steps if s.kept]
-    if current <= cfg.diagnose.found_factor * floor:
+    if current <= dcfg.found_factor * floor:
         verdict = "at_floor"
     elif kept:
         verdict = "partially_explained"
     else:
         verdict = "unexplained"
-    at_bounds = model.params_at_bounds()
-    out = {
-        "unit": "rad",
-        "nominal_heldout_rmse": nominal,
-        "steps": [s.to_json() for s in kept],
-        "final": {"heldout_rmse": current, "noise_floor": noise, "verdict": verdict},
-        "friction_curve": friction_curve(model),
-        "details": {"judging_floor": floor, "found_factor": cfg.diagnose.found_factor,
-                    "saturated_fraction": round(float(d.saturated_fraction), 4),
-                    "rejected": [{"effect": s.effect, "heldout_rmse": s.heldout_rmse} for s in steps if not s.kept],
-                    "at_bounds": at_bounds,
-                    "message": _message(verdict, nominal, current, floor, kept, at_bounds,
-                                        unscreened(cfg.diagnose.candidates, tried | set(model.names)))},
-        "_model": model,
-    }
-    log(out["details"]["message"])
-    return out
+    details, note = space.details(d, model)
+    msg = _message(verdict, nominal, current, floor, kept, model.params_at_bounds(),
+                   unscreened(screened, tried | set(model.names), space.library()), dcfg.found_factor, unit)
+    if note and verdict != "at_floor":
+        msg += "; " + note
+    log(msg)
+    return AutoResult(unit, nominal, kept, [s for s in steps if not s.kept], current, noise, floor, dcfg.found_factor,
+                      verdict, msg, model, details)
 
 
 def bounds_note(at_bounds: dict[str, str]) -> str:
@@ -201,19 +223,21 @@ def bounds_note(at_bounds: dict[str, str]) -> str:
 
 
 def _message(verdict: str, nominal: float, final: float, floor: float, kept: list[AutoStep],
-             at_bounds: dict[str, str] | None = None, left_out: list[str] = ()) -> str:
-    chain = " -> ".join([f"nominal {nominal:.2e}"] + [f"+{s.effect} {s.heldout_rmse:.2e}" for s in kept]) + " rad"
+             at_bounds: dict[str, str] | None = None, left_out: list[str] = (), found_factor: float = 1.5,
+             unit: str = "rad") -> str:
+    chain = " -> ".join([f"nominal {nominal:.2e}"] + [f"+{s.effect} {s.heldout_rmse:.2e}" for s in kept]) + f" {unit}"
     if verdict == "at_floor":
-        return f"at the floor ({final:.2e} <= 1.5x {floor:.2e} rad): {chain}" + bounds_note(at_bounds or {})
+        return (f"at the floor ({final:.2e} <= {found_factor:g}x {floor:.2e} {unit}): {chain}"
+                + bounds_note(at_bounds or {}))
     left_out = list(left_out)
     outside = "an effect outside the library" if not left_out else "an effect not screened or outside the library"
     if verdict == "partially_explained":
         share = 1 - max(final**2 - floor**2, 0) / max(nominal**2 - floor**2, 1e-30)
-        return (f"partially explained ({100 * share:.0f}% of the model error): {chain}; residual {final:.2e} rad "
-                f"left ({times_floor(final, floor)}): {outside}, or a plant/controller mismatch"
+        return (f"partially explained ({100 * share:.0f}% of the model error): {chain}; residual {final:.2e} {unit} "
+                f"left ({times_floor(final, floor, unit)}): {outside}, or a plant/controller mismatch"
                 + unscreened_note(left_out) + bounds_note(at_bounds or {}))
-    return (f"unexplained: no screened effect lowers the held-out RMSE {nominal:.2e} rad "
-            f"({times_floor(nominal, floor)})" + unscreened_note(left_out))
+    return (f"unexplained: no screened effect lowers the held-out RMSE {nominal:.2e} {unit} "
+            f"({times_floor(nominal, floor, unit)})" + unscreened_note(left_out))
 
 
 class _NoBar:

@@ -49,8 +49,7 @@ def _write_json(path: str | None, data: dict) -> None:
     from realm_ms.atomic import write_json
 
     p = Path(path)
-    clean = {k: v for k, v in data.items() if not k.startswith("_")}
-    write_json(p, clean, indent=2, default=float)
+    write_json(p, data, indent=2, default=float)
     print(f"wrote {p}", file=sys.stderr)
 
 
@@ -182,27 +181,8 @@ def _compare(args) -> int:
     _check_model(args)
     c = api.compare(args.data, args.model, None, args.workers, args.device, args.segment, space=args.space,
                     command=args.command)
-    names = [f"J{i}" for i in range(1, 8)]
-    if c["unit"] == "N·m":
-        print(f"torque space ({c['samples']} samples): inverse-dynamics residual RMSE {c['rmse_nm']:.3e} N·m, "
-              f"noise floor ≈ {c['noise_floor_nm']:.2e} N·m")
-        print("joint       " + " ".join(f"{n:>9}" for n in names))
-        print("RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in c["per_joint_rmse_nm"]))
-        _print_bands(c["residual_bands"])
-        _write_json(args.json, c)
-        return 0
-    print(f"replay of {len(c['trajectories'])} trajectories: RMSE {c['rmse_rad']:.3e} rad, noise floor ≈ {c['noise_floor_rad']:.2e} rad")
-    print("joint      " + " ".join(f"{n:>9}" for n in names))
-    print("RMSE [rad] " + " ".join(f"{v:9.2e}" for v in c["per_joint_rmse_rad"]))
-    print("max  [rad] " + " ".join(f"{v:9.2e}" for v in c["per_joint_max_abs_error_rad"]))
-    if c.get("interaction_fraction"):
-        print(f"grasps and stalls against the scene (not modelled by an arm-only replay): {c['interaction_fraction']:.1%} "
-              "of the scored samples simulated but not scored; per trajectory: "
-              + ", ".join(f"{t['name']} {t['masked']['masked']:.0%}" for t in c["trajectories"] if t.get("masked")
-                          and t["masked"]["masked"] > 0))
-    worst = sorted(c["trajectories"], key=lambda t: -(t["rmse_rad"] or 0))[:3]
-    print("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
-    _write_json(args.json, c)
+    print("\n".join(c.lines()))
+    _write_json(args.json, c.to_json())
     return 0
 
 
@@ -221,9 +201,11 @@ def _diagnose(args) -> int:
     _check_outputs(args, files=("--json",))
     _check_model(args)
     d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
-                     log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw)
-    b = d["baseline"]
-    u, sfx = ("N·m", "nm") if d.get("unit") == "N·m" else ("rad", "rad")
+                     log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw).to_json()
+    from realm_ms.sysid.diagnose import UNIT_KEYS
+
+    b, u = d["baseline"], d["unit"]
+    sfx = UNIT_KEYS[u]
     print(f"baseline held-out RMSE {b[f'heldout_rmse_{sfx}']:.3e} {u}, noise floor ≈ {b[f'noise_floor_{sfx}']:.2e} {u}")
     print(d["message"])
     for i, s in enumerate(d["suspects"][: args.top], 1):
@@ -249,31 +231,10 @@ def _fit(args) -> int:
                 generations=args.generations, popsize=args.popsize, checkpoint=args.checkpoint,
                 noise_stop=args.noise_stop, refit=not args.no_refit, space=args.space,
                 command=args.command)
-    print(f"fitted {', '.join(f['effects'])} -> {args.out}")
-    torque = f.get("unit") == "N·m"  # torque space reports N·m (and its params carry no unit table)
-    unit, key, fmt, train_fmt = ("N·m", "nm", "9.3f", ".3f") if torque else ("rad", "rad", "9.2e", ".2e")
-    for k, v in f["params"].items():
-        print(f"  {k:<32} {v:.5g}" + ("" if torque else f" {f['units'][k]}   bounds {f['bounds'][k]}"))
-    if not torque:
-        print("                     " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)) + "      all")
-    for when in ("before", "after"):
-        m = f[when]
-        print(f"{when:<6} held-out [{unit}] " + " ".join(format(v, fmt) for v in m[f"per_joint_heldout_rmse_{key}"])
-              + f"  {format(m[f'heldout_rmse_{key}'], fmt)}   (train {format(m[f'train_rmse_{key}'], train_fmt)})")
-    if torque:
-        _print_bands(f["residual_bands"])
-    if f.get("at_bounds"):
-        print("at a bound (the effect is stretched to explain something else): "
-              + ", ".join(f"{k} ({side})" for k, side in f["at_bounds"].items()))
-    _write_json(args.json, f)
+    print(f"fitted {', '.join(f.effects)} -> {args.out}")
+    print("\n".join(f.lines()))
+    _write_json(args.json, f.to_json())
     return 0
-
-
-def _print_bands(b: dict) -> None:
-    """Torque residual per frequency band (``torque/spectrum.py``)."""
-    print("by band     " + " ".join(f"{'J' + str(i):>9}" for i in range(1, 8)) + "    share")
-    for name, row, share in zip(b["bands"], b["rms_per_joint"], b["share"]):
-        print(f"{name:<11} " + " ".join(f"{v:9.3f}" for v in row) + f"   {100 * share:5.1f}%")
 
 
 def _auto(args) -> int:
@@ -285,7 +246,7 @@ def _auto(args) -> int:
     a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                  progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                  generations=args.generations, max_steps=args.max_steps, space=args.space,
-                 command=args.command)
+                 command=args.command).to_json()
     f = a["final"]
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")

@@ -33,11 +33,11 @@ import numpy as np
 
 from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
 from realm_ms.errors import InputError
-from realm_ms.sysid.optimize import Group, copy_effect, evaluate_groups, linearized_step, typical_start
+from realm_ms.sysid.optimize import Group, LinearStep, copy_effect, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.saturation import PAD_S
 from realm_ms.agents.robot_model import RobotModel
-from realm_ms.sysid.signatures import Features, compute, noise_floor_of
+from realm_ms.sysid.signatures import Features, compute, evidence, noise_floor_of
 from realm_ms.sysid.timeseries import Trajectory
 
 
@@ -61,60 +61,88 @@ class DiagnoseConfig:
     retune_model: bool = True  # re-fit the given model's parameters together with each candidate
 
 
+#: JSON key suffix of each space's unit (``heldout_rmse_rad``, ``heldout_rmse_nm``)
+UNIT_KEYS = {"rad": "rad", "N·m": "nm"}
+
+
 @dataclass
 class Suspect:
     effect: str
     score: float
-    heldout_rmse_after_rad: float
-    train_rmse_after_rad: float
+    heldout_rmse_after: float  # in the space's unit
+    train_rmse_after: float
     params: dict[str, float]
     evidence: str
     confounded_with: list[str] = field(default_factory=list)
     retuned_model_params: dict[str, float] = field(default_factory=dict)
     explains: float = 0.0  # share of the held-out model error (MSE above the noise floor) removed
 
-    def to_json(self) -> dict:
+    def to_json(self, unit: str = "rad") -> dict:
+        k = UNIT_KEYS[unit]
         return {"effect": self.effect, "score": round(float(self.score), 6), "explains": round(float(self.explains), 4),
-                "heldout_rmse_after_rad": float(self.heldout_rmse_after_rad), "params": self.params,
-                "evidence": self.evidence, "train_rmse_after_rad": float(self.train_rmse_after_rad),
+                f"heldout_rmse_after_{k}": float(self.heldout_rmse_after), "params": self.params,
+                "evidence": self.evidence, f"train_rmse_after_{k}": float(self.train_rmse_after),
                 "confounded_with": self.confounded_with, "retuned_model_params": self.retuned_model_params}
 
 
 @dataclass
+class Replayed:
+    """What only the position-space replay knows about the held-out data: residual features and
+    the samples simulated but not scored (torque-saturated bursts, grasps and stalls)."""
+
+    features: Features
+    saturated_fraction: float = 0.0  # held-out samples in torque-saturated bursts (``saturation.py``)
+    interaction_fraction: float = 0.0  # held-out samples in grasps/stalls (``interaction.py``)
+    masked: dict = field(default_factory=dict)  # trajectory name -> its grasp/stall/masked shares
+
+
+@dataclass
 class Diagnosis:
+    """The ranking of ``diagnose`` in either space (errors in ``unit``)."""
+
     baseline_heldout_rmse: float
     baseline_train_rmse: float
     noise_floor: float
     noise_floor_per_joint: np.ndarray
     per_joint_heldout_rmse: np.ndarray
-    missing_effect_found: bool
     suspects: list[Suspect]
-    features: Features
     message: str
-    unexplained: bool = False
     verdict: str = "no_missing_effect"  # no_missing_effect | found | partially_explained | unexplained
     judging_floor: float = 0.0  # hypot(noise floor, replay floor): what "at the floor" is measured against
-    saturated_fraction: float = 0.0  # held-out samples in torque-saturated bursts, not scored (``saturation.py``)
-    interaction_fraction: float = 0.0  # held-out samples in grasps/stalls, not scored (``interaction.py``)
-    masked: dict = field(default_factory=dict)  # trajectory name -> its grasp/stall/masked shares
+    unit: str = "rad"
+    replayed: Replayed | None = None  # position space only
+    split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
+
+    @property
+    def missing_effect_found(self) -> bool:
+        return self.verdict == "found"
+
+    @property
+    def unexplained(self) -> bool:
+        return self.verdict == "unexplained"
+
+    @property
+    def saturated_fraction(self) -> float:
+        return self.replayed.saturated_fraction if self.replayed else 0.0
 
     def to_json(self) -> dict:
-        return {
-            "baseline": {"heldout_rmse_rad": float(self.baseline_heldout_rmse), "noise_floor_rad": float(self.noise_floor),
-                         "judging_floor_rad": float(self.judging_floor),
-                         "saturated_fraction": round(float(self.saturated_fraction), 4),
-                         "interaction_fraction": round(float(self.interaction_fraction), 4),
-                         "masked_per_trajectory": self.masked,
-                         "train_rmse_rad": float(self.baseline_train_rmse),
-                         "per_joint_heldout_rmse_rad": [float(x) for x in self.per_joint_heldout_rmse],
-                         "noise_floor_per_joint_rad": [float(x) for x in self.noise_floor_per_joint]},
-            "verdict": self.verdict,
-            "missing_effect_found": bool(self.missing_effect_found),
-            "unexplained": bool(self.unexplained),
-            "message": self.message,
-            "suspects": [s.to_json() for s in self.suspects],
-            "features": self.features.to_dict(),
-        }
+        k = UNIT_KEYS[self.unit]
+        baseline = {f"heldout_rmse_{k}": float(self.baseline_heldout_rmse), f"noise_floor_{k}": float(self.noise_floor),
+                    f"judging_floor_{k}": float(self.judging_floor), f"train_rmse_{k}": float(self.baseline_train_rmse),
+                    f"per_joint_heldout_rmse_{k}": [float(x) for x in self.per_joint_heldout_rmse],
+                    f"noise_floor_per_joint_{k}": [float(x) for x in self.noise_floor_per_joint]}
+        out = {"unit": self.unit, "baseline": baseline, "verdict": self.verdict,
+               "missing_effect_found": self.missing_effect_found, "unexplained": self.unexplained,
+               "message": self.message, "suspects": [s.to_json(self.unit) for s in self.suspects]}
+        if self.replayed:
+            r = self.replayed
+            baseline.update({"saturated_fraction": round(float(r.saturated_fraction), 4),
+                             "interaction_fraction": round(float(r.interaction_fraction), 4),
+                             "masked_per_trajectory": r.masked})
+            out["features"] = r.features.to_dict()
+        if self.split is not None:
+            out["split"] = self.split
+        return out
 
 
 def gravity_at_samples(segset: SegmentSet, model) -> np.ndarray:
@@ -126,8 +154,21 @@ def gravity_at_samples(segset: SegmentSet, model) -> np.ndarray:
         return model.gravity_torque(q).numpy().astype(np.float64)
 
 
+@dataclass
+class _Screened:
+    """Each candidate's point after screening: train MSE, held-out MSE and held-out simulation."""
+
+    groups: list[Group]
+    improved: list[bool]  # the step lowered the train loss (else the point is the baseline's)
+    train_mse: np.ndarray
+    heldout_mse: np.ndarray
+    heldout_sim: list[np.ndarray]
+
+
 def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | None = None,
              config: DiagnoseConfig | None = None, evaluator=None, log=print) -> Diagnosis:
+    """Baseline, screening (with a re-screen of inert candidates and a refinement of the best),
+    ranking, confounds, verdict: one named step each below."""
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.simulator import SimConfig
 
@@ -152,7 +193,38 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
         if n not in EFFECTS:
             raise InputError(f"unknown candidate effect {n!r}")
 
-    # 1. baseline
+    _log_masked(tr_ss, he_ss, log)
+    empty = Group.of(copies())
+    (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], fixed, [empty], [empty.u[None]])
+    floor, floor_j = noise_floor_of(he_ss, b_he.sim[0])
+    feats = compute(tr_ss, b_tr.sim[0], gravity_at_samples(tr_ss, ev.sim.model if ev.device == "cpu" else _arm_model()))
+    log(f"baseline held-out RMSE {b_he.rmse:.3e} rad")
+
+    groups = [Group.of([make_effect(n)] + copies()) for n in names]
+    log(f"screening {len(groups)} effects ({sum(len(g.params) for g in groups)} parameters)")
+    sc = _screen(ev, tr_ss, he_ss, fixed, groups, names, b_he, floor, cfg, log)
+    _refine(ev, tr_ss, he_ss, fixed, sc, names, cfg, log)
+
+    # noise floor: the second-difference estimate is inflated by model error, so take the smaller of
+    # the baseline's and the best screened candidate's held-out residual
+    he_rmse = np.sqrt(sc.heldout_mse)
+    if len(he_rmse) and he_rmse[int(np.argmin(he_rmse))] < b_he.rmse:
+        f2, f2_j = noise_floor_of(he_ss, sc.heldout_sim[int(np.argmin(he_rmse))])
+        if f2 < floor:
+            floor, floor_j = f2, f2_j
+
+    suspects = _rank(names, sc, b_he.rmse, feats)
+    _mark_confounds(suspects, b_he.rmse, cfg)
+    log(f"noise floor ≈ {floor:.2e} rad")
+    verdict, msg, judge = judge_verdict(b_he.rmse, floor, suspects, cfg, left_out=unscreened(cfg.candidates, present))
+    # the verdict (msg) is printed once, by the caller (CLI: on stdout)
+    masked = {t.name: t.meta["interaction"] for t in train + heldout if "interaction" in t.meta}
+    return Diagnosis(b_he.rmse, b_tr.rmse, floor, floor_j, np.sqrt(b_he.per_joint_mse[0]), suspects, msg, verdict, judge,
+                     replayed=Replayed(feats, he_ss.saturated_fraction, he_ss.interaction_fraction, masked))
+
+
+def _log_masked(tr_ss: SegmentSet, he_ss: SegmentSet, log) -> None:
+    """Say which samples are simulated but not scored (saturation bursts, grasps and stalls)."""
     log(f"baseline: {tr_ss.n} train / {he_ss.n} held-out segments")
     if tr_ss.saturated_fraction or he_ss.saturated_fraction:
         log(f"torque-saturated bursts (a motor at its limit, +-{PAD_S:g} s): {tr_ss.saturated_fraction:.1%} of train, "
@@ -160,27 +232,22 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     if tr_ss.interaction_fraction or he_ss.interaction_fraction:
         log(f"grasps and stalls against the scene (arm-only replay): {tr_ss.interaction_fraction:.1%} of train, "
             f"{he_ss.interaction_fraction:.1%} of held-out samples simulated but not scored")
-    empty = Group.of(copies())
-    (b_tr,), (b_he,) = evaluate_groups(ev, [tr_ss, he_ss], fixed, [empty], [empty.u[None]])
-    base_tr_rmse, base_he_rmse = float(np.sqrt(b_tr[0][0])), float(np.sqrt(b_he[0][0]))
-    floor, floor_j = noise_floor_of(he_ss, b_he[2][0])
-    feats = compute(tr_ss, b_tr[2][0], gravity_at_samples(tr_ss, ev.sim.model if ev.device == "cpu" else _arm_model()))
-    log(f"baseline held-out RMSE {base_he_rmse:.3e} rad")
 
-    # 2. screening: block-diagonal secant sensitivities, one LM step per effect, scored on held-out
-    groups = [Group.of([make_effect(n)] + copies()) for n in names]
-    log(f"screening {len(groups)} effects ({sum(len(g.params) for g in groups)} parameters)")
+
+def _screen(ev, tr_ss, he_ss, fixed, groups: list[Group], names: list[str], b_he, floor: float, cfg: DiagnoseConfig,
+            log) -> _Screened:
+    """Block-diagonal secant sensitivities, one LM step per effect, scored on held-out. An effect
+    with parameters that do nothing at its off-values (a payload's centre of mass at zero mass) gets
+    one linearised step from its typical strengths too, as a fit's second start does, unless a
+    first-pass candidate already reaches the floor (it leaves the others nothing to win but a tie)."""
     steps = linearized_step(ev, tr_ss, fixed, groups, first=True, block=True, also=[he_ss])
-    # an effect with parameters that do nothing at its off-values (a payload's centre of mass at zero
-    # mass) gets one linearised step from its typical strengths too, as a fit's second start does
     inert = {i: _own_insensitive(g, st) for i, (g, st) in enumerate(zip(groups, steps))}
     redo = [i for i, keys in inert.items() if keys]
     if redo:
-        # a first-pass candidate already at the floor leaves the others nothing to win but a tie
-        he_first = [st["scores"][1][0][0] if st["improved"] else np.inf for st in steps]
+        he_first = [st.also[0].mse[0] if st.improved else np.inf for st in steps]
         i0 = int(np.argmin(he_first))
         if np.isfinite(he_first[i0]):
-            at = judging_floor(min(floor, noise_floor_of(he_ss, steps[i0]["scores"][1][2][0])[0]), cfg.replay_floor_rad)
+            at = judging_floor(min(floor, noise_floor_of(he_ss, steps[i0].also[0].sim[0])[0]), cfg.replay_floor_rad)
             if np.sqrt(he_first[i0]) <= cfg.found_factor * at:
                 log(f"not re-screening {', '.join(names[i] for i in redo)} from typical strengths: {names[i0]} already "
                     f"brings the held-out RMSE to {np.sqrt(he_first[i0]):.2e} rad, within {cfg.found_factor:g}x the floor {at:.2e} rad")
@@ -190,66 +257,56 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
             + " from typical strengths")
         alts = [typical_start(groups[i], {p.key for p in groups[i].effects[0].free_params}) for i in redo]
         for i, g, st in zip(redo, alts, linearized_step(ev, tr_ss, fixed, alts, first=True, block=True, also=[he_ss])):
-            if st["improved"] and st["mse_after"] < steps[i]["mse_after"]:
+            if st.improved and st.mse_after < steps[i].mse_after:
                 groups[i], steps[i] = g, st
-    tr_mse = np.array([st["mse_after"] for st in steps])
-    he_mse = np.array([st["scores"][1][0][0] if st["improved"] else b_he[0][0] for st in steps])
-    he_sim = [st["scores"][1][2][0] if st["improved"] else b_he[2][0] for st in steps]  # held-out q at each group's point
-    order = np.argsort(he_mse)
-    refine = [int(i) for i in order[: cfg.refine] if steps[int(i)]["improved"]]
-    if refine:
-        log(f"refining {', '.join(names[i] for i in refine)}")
-        sub = [groups[i] for i in refine]
-        steps2 = linearized_step(ev, tr_ss, fixed, sub, first=False, also=[he_ss])
-        for i, st in zip(refine, steps2):
-            if st["improved"]:
-                tr_mse[i], he_mse[i], he_sim[i] = st["mse_after"], st["scores"][1][0][0], st["scores"][1][2][0]
-    he_rmse = np.sqrt(he_mse)
+    return _Screened(list(groups), [st.improved for st in steps], np.array([st.mse_after for st in steps]),
+                     np.array([st.also[0].mse[0] if st.improved else b_he.mse[0] for st in steps]),
+                     [st.also[0].sim[0] if st.improved else b_he.sim[0] for st in steps])
 
-    # noise floor: the second-difference estimate is inflated by model error, so take the smaller of
-    # the baseline's and the best screened candidate's held-out residual
-    best_i = int(np.argmin(he_rmse)) if len(he_rmse) else None
-    if best_i is not None and he_rmse[best_i] < base_he_rmse:
-        f2, f2_j = noise_floor_of(he_ss, he_sim[best_i])
-        if f2 < floor:
-            floor, floor_j = f2, f2_j
 
-    # 3. rank
+def _refine(ev, tr_ss, he_ss, fixed, sc: _Screened, names: list[str], cfg: DiagnoseConfig, log) -> None:
+    """A second (full-Jacobian) linearised iteration for the ``cfg.refine`` best, in place."""
+    order = np.argsort(sc.heldout_mse)
+    refine = [int(i) for i in order[: cfg.refine] if sc.improved[int(i)]]
+    if not refine:
+        return
+    log(f"refining {', '.join(names[i] for i in refine)}")
+    for i, st in zip(refine, linearized_step(ev, tr_ss, fixed, [sc.groups[i] for i in refine], first=False, also=[he_ss])):
+        if st.improved:
+            sc.train_mse[i], sc.heldout_mse[i], sc.heldout_sim[i] = st.mse_after, st.also[0].mse[0], st.also[0].sim[0]
+
+
+def _rank(names: list[str], sc: _Screened, base_he_rmse: float, feats: Features) -> list[Suspect]:
+    """Suspects best first: score = relative fall of the held-out RMSE, with the evidence sentence."""
     suspects = []
-    for i, (n, g) in enumerate(zip(names, groups)):
+    for i, (n, g) in enumerate(zip(names, sc.groups)):
         fx = g.effects[0]
         vals = fx.values()
         retuned = {f"{b.name}.{k}": round(v, 9) for b in g.effects[1:] for k, v in b.values().items()
                    if k in {p.local_key for p in b.free_params}}
-        after_he = float(he_rmse[i])
-        after_tr = float(np.sqrt(tr_mse[i]))
-        sc = (base_he_rmse - after_he) / base_he_rmse if base_he_rmse > 0 else 0.0
+        after_he = float(np.sqrt(sc.heldout_mse[i]))
+        sc_i = (base_he_rmse - after_he) / base_he_rmse if base_he_rmse > 0 else 0.0
         free = {p.local_key for p in fx.free_params}
-        sus = Suspect(n, sc, after_he, after_tr, {k: round(v, 9) for k, v in vals.items() if k in free},
-                      fx.evidence(vals, feats))
-        sus.retuned_model_params = retuned
-        suspects.append(sus)
+        suspects.append(Suspect(n, sc_i, after_he, float(np.sqrt(sc.train_mse[i])),
+                                {k: round(v, 9) for k, v in vals.items() if k in free}, evidence(fx, vals, feats),
+                                retuned_model_params=retuned))
     suspects.sort(key=lambda s: -s.score)
+    return suspects
 
-    # 4. confounds
+
+def _mark_confounds(suspects: list[Suspect], base_he_rmse: float, cfg: DiagnoseConfig) -> None:
+    """Documented look-alikes (``effects.CONFOUNDS``) among the top three that remove a similar share
+    of the held-out error are named on each other, in place."""
     for a in suspects[:3]:
         for b in suspects[:3]:
             if a is b or b.effect not in confounded_with(a.effect) or a.score <= 0 or b.score <= 0:
                 continue
-            ra = base_he_rmse - a.heldout_rmse_after_rad
-            rb = base_he_rmse - b.heldout_rmse_after_rad
+            ra = base_he_rmse - a.heldout_rmse_after
+            rb = base_he_rmse - b.heldout_rmse_after
             if abs(ra - rb) <= cfg.confound_margin * max(ra, rb) and b.effect not in a.confounded_with:
                 a.confounded_with.append(b.effect)
                 a.evidence += (f" (confounded with {b.effect}: it removes a similar share of the held-out error; "
                                f"the data cannot separate them, consider fitting both or recording with other gains/configurations)")
-
-    log(f"noise floor ≈ {floor:.2e} rad")
-    # 5. verdict
-    verdict, msg, judge = judge_verdict(base_he_rmse, floor, suspects, cfg, left_out=unscreened(cfg.candidates, present))
-    # the verdict (msg) is printed once, by the caller (CLI: on stdout)
-    return Diagnosis(base_he_rmse, base_tr_rmse, floor, floor_j, np.sqrt(b_he[1][0]), verdict == "found", suspects, feats,
-                     msg, verdict == "unexplained", verdict, judge, he_ss.saturated_fraction, he_ss.interaction_fraction,
-                     {t.name: t.meta["interaction"] for t in train + heldout if "interaction" in t.meta})
 
 
 def judging_floor(noise_floor: float, replay_floor: float) -> float:
@@ -265,15 +322,16 @@ def times_floor(value: float, floor: float, unit: str = "rad") -> str:
 
 
 def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg: DiagnoseConfig,
-                  unit: str = "rad", left_out: list[str] = ()) -> tuple[str, str, float]:
+                  unit: str = "rad", left_out: list[str] = (), replay_floor: float | None = None) -> tuple[str, str, float]:
     """(verdict, message, judging floor) for a baseline held-out RMSE and ranked suspects; fills
     each suspect's ``explains``. ``left_out``: library effects not screened (``unscreened``), named
-    where the residual is not explained. See the module docstring for the rules."""
+    where the residual is not explained. ``replay_floor``: the space's own error on a matching plant
+    (default ``cfg.replay_floor_rad``). See the module docstring for the rules."""
     left_out = list(left_out)
-    floor = judging_floor(noise_floor, cfg.replay_floor_rad if unit == "rad" else 0.0)
+    floor = judging_floor(noise_floor, cfg.replay_floor_rad if replay_floor is None else replay_floor)
     excess = max(base**2 - floor**2, 1e-30)
     for sp in suspects:
-        sp.explains = float(np.clip((base**2 - sp.heldout_rmse_after_rad**2) / excess, 0.0, 1.0))
+        sp.explains = float(np.clip((base**2 - sp.heldout_rmse_after**2) / excess, 0.0, 1.0))
     best = suspects[0] if suspects else None
     f = lambda v: f"{v:.2e} {unit}"  # noqa: E731
     ratio = base / floor if floor > 0 else math.inf
@@ -281,14 +339,14 @@ def judge_verdict(base: float, noise_floor: float, suspects: list[Suspect], cfg:
         return "no_missing_effect", (f"no missing effect: held-out RMSE {f(base)} is within {cfg.found_factor:g}x the "
                                      f"floor {f(floor)} (noise {f(noise_floor)})"), floor
     helps = best is not None and best.score >= cfg.min_improvement and best.explains >= cfg.min_explained
-    if helps and best.heldout_rmse_after_rad <= cfg.found_factor * floor:
-        return "found", (f"missing effect found: {best.effect} (held-out RMSE {f(base)} -> {f(best.heldout_rmse_after_rad)}, "
+    if helps and best.heldout_rmse_after <= cfg.found_factor * floor:
+        return "found", (f"missing effect found: {best.effect} (held-out RMSE {f(base)} -> {f(best.heldout_rmse_after)}, "
                          f"within {cfg.found_factor:g}x the floor {f(floor)}; {100 * best.explains:.0f}% of the model "
                          "error)"), floor
     none = "none among those screened" if left_out else "none in the library"
     if helps:
         nxt = [sp.effect for sp in suspects[1:] if sp.score >= cfg.min_improvement / 2][:3]
-        left = best.heldout_rmse_after_rad
+        left = best.heldout_rmse_after
         return "partially_explained", (
             f"partially explained: {100 * best.explains:.0f}% of the model error by {best.effect} (held-out RMSE "
             f"{f(base)} -> {f(left)}), residual {f(left)} left ({times_floor(left, floor, unit)});"
@@ -323,10 +381,10 @@ def unscreened_note(names: list[str]) -> str:
     return f"; not screened here: {', '.join(names)} (rank them with `realm sysid diagnose DATA --candidates {listed}`)"
 
 
-def _own_insensitive(group: Group, step: dict) -> list[str]:
+def _own_insensitive(group: Group, step: LinearStep) -> list[str]:
     """The candidate effect's own parameters (not the re-tuned model's) whose probe did nothing, by name."""
     own, ps = group.effects[0].name, group.params.params
-    return list(dict.fromkeys(ps[k].spec.name for k in step["insensitive"] if ps[k].effect == own))
+    return list(dict.fromkeys(ps[k].spec.name for k in step.insensitive if ps[k].effect == own))
 
 
 def _arm_model():

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.errors import InputError
-from realm_ms.sysid.optimize import Group, cma_fit, confidence_intervals, evaluate_groups, linearized_step, typical_start
+from realm_ms.sysid.optimize import Group, GroupScores, cma_fit, confidence_intervals, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
@@ -62,22 +62,81 @@ class FitResult:
     # noise (rad, estimated at the linearised start; None where no start improved on the given values)
     cma_stop: str = ""
     noise_rmse: float | None = None
+    split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
+    unit = "rad"
+
+    @property
+    def heldout_after(self) -> float:
+        return float(self.after["heldout_rmse_rad"])
 
     def to_json(self) -> dict:
-        return {"effects": self.effects, "params": self.params, "before": self.before, "after": self.after,
-                "history": self.history, "cma_stop": self.cma_stop, "noise_rmse_rad": self.noise_rmse,
-                "units": self.units, "bounds": self.bounds,
-                "uncertainty": self.uncertainty, "linearized_start": self.gn_history,
-                "at_bounds": self.model.params_at_bounds()}
+        out = {"unit": self.unit, "effects": self.effects, "params": self.params, "before": self.before,
+               "after": self.after, "history": self.history, "cma_stop": self.cma_stop, "noise_rmse_rad": self.noise_rmse,
+               "units": self.units, "bounds": self.bounds, "uncertainty": self.uncertainty,
+               "linearized_start": self.gn_history, "at_bounds": self.model.params_at_bounds()}
+        if self.split is not None:
+            out["split"] = self.split
+        return out
+
+    def lines(self) -> list[str]:
+        """The terminal summary: fitted values with units and bounds, per-joint held-out RMSE."""
+        out = [f"  {k:<32} {v:.5g} {self.units[k]}   bounds {self.bounds[k]}" for k, v in self.params.items()]
+        out.append("                     " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)) + "      all")
+        for when, m in (("before", self.before), ("after", self.after)):
+            out.append(f"{when:<6} held-out [rad] " + " ".join(f"{v:9.2e}" for v in m["per_joint_heldout_rmse_rad"])
+                       + f"  {m['heldout_rmse_rad']:9.2e}   (train {m['train_rmse_rad']:.2e})")
+        return out + at_bounds_lines(self.model.params_at_bounds())
 
 
-def _metrics(tr_res, he_res) -> dict:
-    return {
-        "train_rmse_rad": float(np.sqrt(tr_res[0][0])),
-        "heldout_rmse_rad": float(np.sqrt(he_res[0][0])),
-        "per_joint_heldout_rmse_rad": [float(x) for x in np.sqrt(he_res[1][0])],
-        "per_joint_train_rmse_rad": [float(x) for x in np.sqrt(tr_res[1][0])],
-    }
+def at_bounds_lines(at_bounds: dict[str, str]) -> list[str]:
+    """A fit's parameters pressed against a bound, as a terminal line (none if there are none)."""
+    if not at_bounds:
+        return []
+    return ["at a bound (the effect is stretched to explain something else): "
+            + ", ".join(f"{k} ({side})" for k, side in at_bounds.items())]
+
+
+@dataclass
+class CompareResult:
+    """``compare``: the replay of every trajectory with one model (rad)."""
+
+    rmse: float
+    per_joint_rmse: list[float]
+    per_joint_max_abs_error: list[float]
+    noise_floor: float
+    noise_floor_per_joint: list[float]
+    saturated_fraction: float
+    interaction_fraction: float
+    trajectories: list[dict]  # {name, rmse_rad, max_abs_error_rad, masked}
+    error_over_time: list[tuple[str, float, float]]  # (trajectory, t, RMS over joints) per scored sample
+    unit = "rad"
+
+    def to_json(self) -> dict:
+        return {"unit": self.unit, "rmse_rad": self.rmse, "per_joint_rmse_rad": self.per_joint_rmse,
+                "per_joint_max_abs_error_rad": self.per_joint_max_abs_error, "noise_floor_rad": self.noise_floor,
+                "saturated_fraction": self.saturated_fraction, "interaction_fraction": self.interaction_fraction,
+                "noise_floor_per_joint_rad": self.noise_floor_per_joint, "trajectories": self.trajectories,
+                "error_over_time": self.error_over_time}
+
+    def lines(self) -> list[str]:
+        """The terminal summary: per-joint RMSE and max error, masked samples, worst trajectories."""
+        out = [f"replay of {len(self.trajectories)} trajectories: RMSE {self.rmse:.3e} rad, noise floor ≈ {self.noise_floor:.2e} rad",
+               "joint      " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)),
+               "RMSE [rad] " + " ".join(f"{v:9.2e}" for v in self.per_joint_rmse),
+               "max  [rad] " + " ".join(f"{v:9.2e}" for v in self.per_joint_max_abs_error)]
+        if self.interaction_fraction:
+            out.append(f"grasps and stalls against the scene (not modelled by an arm-only replay): {self.interaction_fraction:.1%} "
+                       "of the scored samples simulated but not scored; per trajectory: "
+                       + ", ".join(f"{t['name']} {t['masked']['masked']:.0%}" for t in self.trajectories if t.get("masked")
+                                   and t["masked"]["masked"] > 0))
+        worst = sorted(self.trajectories, key=lambda t: -(t["rmse_rad"] or 0))[:3]
+        out.append("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
+        return out
+
+
+def _metrics(tr: GroupScores, he: GroupScores) -> dict:
+    return {"train_rmse_rad": tr.rmse, "heldout_rmse_rad": he.rmse, "per_joint_heldout_rmse_rad": he.per_joint_rmse,
+            "per_joint_train_rmse_rad": tr.per_joint_rmse}
 
 
 def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | None = None,
@@ -120,18 +179,18 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
         # first iteration as the diagnosis screens (block probes: robust for stick-slip effects),
         # then full-Jacobian iterations
         rs = linearized_step(ev, tr_ss, base_fixed, starts, first=(it == 0), block=(it == 0))
-        mse = [r["mse_after"] for r in rs]
-        sims = [r["scores"][0][2][0] if r["improved"] else sim for r, sim in zip(rs, sims)]
+        mse = [r.mse_after for r in rs]
+        sims = [r.scores[0].sim[0] if r.improved else sim for r, sim in zip(rs, sims)]
         best = int(np.argmin(mse))
         gn_hist.append({"iteration": it + 1, "train_rmse_rad": float(np.sqrt(mse[best]))})
-        log(f"linearised start {it + 1}: train RMSE {np.sqrt(rs[0]['mse_before']):.3e} -> "
+        log(f"linearised start {it + 1}: train RMSE {np.sqrt(rs[0].mse_before):.3e} -> "
             + ", ".join(f"{np.sqrt(m):.3e}" for m in mse) + " rad" + (" (starts: given, typical)" if len(starts) > 1 else ""))
     if starts[int(np.argmin(mse))] is not group:
         group.apply(starts[int(np.argmin(mse))].u)
 
     def loss(us: np.ndarray) -> np.ndarray:
         (res,) = evaluate_groups(ev, [tr_ss], base_fixed, [group], [us])
-        return res[0][0]
+        return res[0].mse
 
     start_loss = gn_hist[-1]["train_rmse_rad"] ** 2 if gn_hist else None
     sim = sims[int(np.argmin(mse))] if gn_hist else None
@@ -162,7 +221,7 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
 
 
 def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: float = 8.0, burn_in_s: float = 1.0,
-            evaluator=None) -> dict:
+            evaluator=None) -> CompareResult:
     """Replay ``data`` with ``model``: per-joint RMSE / max error, error over time, noise floor."""
     from realm_ms.sysid.engine import Evaluator
     from realm_ms.sysid.simulator import SimConfig
@@ -171,7 +230,7 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
     ev = evaluator or Evaluator.auto(SimConfig.from_model(model))
     ss = SegmentSet.build(data, model.physics_hz, segment_s, burn_in_s, gains=model.gains)
     (r,) = evaluate_groups(ev, [ss], sorted(model.effects, key=lambda f: f.order), [Group.of([])], [np.zeros((1, 0))])
-    sim = r[0][2][0]
+    sim = r[0].sim[0]
     res = np.where(ss.mask[..., None], ss.meas - sim, np.nan)
     floor, floor_j = noise_floor(ss, res)
     per_traj = []
@@ -189,16 +248,6 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
         e = np.sqrt(np.mean(res[i][m] ** 2, axis=1))
         over_time += [(data[s.traj].name, float(a), float(b)) for a, b in zip(t, e)]
     allres = res[ss.mask]
-    return {
-        "rmse_rad": float(np.sqrt(np.mean(allres**2))),
-        "per_joint_rmse_rad": [float(x) for x in np.sqrt(np.mean(allres**2, axis=0))],
-        "per_joint_max_abs_error_rad": [float(x) for x in np.max(np.abs(allres), axis=0)],
-        "noise_floor_rad": floor,
-        "saturated_fraction": ss.saturated_fraction,
-        "interaction_fraction": ss.interaction_fraction,
-        "noise_floor_per_joint_rad": [float(x) for x in floor_j],
-        "trajectories": per_traj,
-        "error_over_time": over_time,
-        "_segset": ss,
-        "_sim": sim,
-    }
+    return CompareResult(float(np.sqrt(np.mean(allres**2))), [float(x) for x in np.sqrt(np.mean(allres**2, axis=0))],
+                         [float(x) for x in np.max(np.abs(allres), axis=0)], floor, [float(x) for x in floor_j],
+                         ss.saturated_fraction, ss.interaction_fraction, per_traj, over_time)

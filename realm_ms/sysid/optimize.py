@@ -91,10 +91,32 @@ def batch_effects(base: list[Effect], rows: list[dict[str, np.ndarray]], all_nam
     return out
 
 
+@dataclass
+class GroupScores:
+    """One group's R points evaluated on one segment set."""
+
+    mse: np.ndarray  # (R,) mean over scored samples and joints, rad^2
+    per_joint_mse: np.ndarray  # (R, 7)
+    sim: np.ndarray  # (R, N, L, 7) simulated q at the data samples
+
+    def row(self, i: int) -> "GroupScores":
+        """Point ``i`` alone (still a batch of one)."""
+        return GroupScores(self.mse[i:i + 1], self.per_joint_mse[i:i + 1], self.sim[i:i + 1])
+
+    @property
+    def rmse(self) -> float:
+        """RMSE of the first (usually the only) point."""
+        return float(np.sqrt(self.mse[0]))
+
+    @property
+    def per_joint_rmse(self) -> list[float]:
+        return [float(x) for x in np.sqrt(self.per_joint_mse[0])]
+
+
 def evaluate_groups(evaluator, segsets: list[SegmentSet], base: list[Effect], groups: list[Group],
-                    points: list[np.ndarray]) -> list[list]:
+                    points: list[np.ndarray]) -> list[list[GroupScores]]:
     """Evaluate, for each group g, the points ``points[g]`` (R_g, P_g) on every segset; all in one
-    batch. Returns ``out[s][g]`` = Scores with R_g candidates (plus the raw sampled q)."""
+    batch. Returns ``out[s][g]``: the scores of group g's R_g points on segset s."""
     rows: list[dict[str, np.ndarray]] = []
     owner: list[tuple[int, int]] = []
     names: list[str] = []
@@ -120,9 +142,26 @@ def evaluate_groups(evaluator, segsets: list[SegmentSet], base: list[Effect], gr
         per_group = []
         for gi in range(len(groups)):
             idx = [c for c, (g, _) in enumerate(owner) if g == gi]
-            per_group.append((sc.mse[idx], sc.per_joint_mse[idx], sim[idx]))
+            per_group.append(GroupScores(sc.mse[idx], sc.per_joint_mse[idx], sim[idx]))
         results.append(per_group)
     return results
+
+
+@dataclass
+class LinearStep:
+    """One group's linearised step (``linearized_step``)."""
+
+    mse_before: float  # train MSE at the group's point before the step
+    mse_after: float  # ... after it (= before when no step lowered it)
+    improved: bool
+    # at the chosen point, on ``ss`` and then each of ``also`` (None when not improved)
+    scores: list[GroupScores] | None
+    insensitive: list[int]  # parameters whose probe did not change the simulation
+
+    @property
+    def also(self) -> list[GroupScores]:
+        """The scores on the ``also`` sets (the held-out set first)."""
+        return self.scores[1:] if self.scores else []
 
 
 #: a probe whose rollout moves no sample by more than this saw nothing (float32 rollouts differ by
@@ -155,13 +194,12 @@ def probe_blocks(ps: ParamSet, block: bool) -> list[list[int]]:
 
 
 def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[Group], first: bool,
-                    damping: float = 1e-3, block: bool = False, also: list[SegmentSet] | None = None) -> list[dict]:
+                    damping: float = 1e-3, block: bool = False, also: list[SegmentSet] | None = None) -> list[LinearStep]:
     """One Gauss-Newton/LM iteration for every group independently (other groups off), batched:
     one probe rollout per parameter (or per block, see ``probe_blocks``) for the secant
     sensitivities, then the full and the half step evaluated on ``ss`` (+ ``also``) in one batch.
-    Each group moves to the better step if it lowers the loss on ``ss``. Returns per group
-    {'mse_before', 'mse_after', 'scores': [(mse, per_joint_mse, sim) on ss and each of also],
-    'insensitive': indices of the parameters whose probe did not change the simulation}."""
+    Each group moves to the better step if it lowers the loss on ``ss``. Returns a ``LinearStep``
+    per group."""
     pts, plans = [], []
     for g in groups:
         h = probe_steps(g.params, g.u, first)
@@ -175,8 +213,9 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
         plans.append((h, blocks))
     res = evaluate_groups(evaluator, [ss], base, groups, pts)[0]
     mask = ss.mask
-    cand, insensitive = [], []
-    for g, (h, blocks), (mse, _, sim) in zip(groups, plans, res):
+    cand, insensitive, mse0 = [], [], []
+    for g, (h, blocks), sc in zip(groups, plans, res):
+        sim = sc.sim
         y0 = sim[0][mask]  # (M, 7)
         r = (ss.meas[mask] - y0).ravel()
         cols = np.zeros((y0.size, len(h)))
@@ -205,19 +244,18 @@ def linearized_step(evaluator, ss: SegmentSet, base: list[Effect], groups: list[
             except np.linalg.LinAlgError:
                 delta[ok] = np.linalg.lstsq(jtj + reg, Jo.T @ r, rcond=None)[0]
         cand.append(np.vstack([g.u, np.clip(g.u + delta, 0, 1), np.clip(g.u + 0.5 * delta, 0, 1)]))
-        g._mse0 = float(mse[0])
+        mse0.append(float(sc.mse[0]))
     sets = [ss] + list(also or [])
     res2 = evaluate_groups(evaluator, sets, base, groups, [c[1:] for c in cand])
     out = []
-    for gi, (g, c) in enumerate(zip(groups, cand)):
-        mse = res2[0][gi][0]
+    for gi, (g, c, before) in enumerate(zip(groups, cand, mse0)):
+        mse = res2[0][gi].mse
         best = int(np.argmin(mse))
-        improved = mse[best] < g._mse0
+        improved = bool(mse[best] < before)
         if improved:
             g.apply(c[1 + best])
-        scores = [(s[gi][0][best:best + 1], s[gi][1][best:best + 1], s[gi][2][best:best + 1]) for s in res2] if improved else None
-        out.append({"mse_before": g._mse0, "mse_after": float(min(mse[best], g._mse0)), "improved": bool(improved),
-                    "scores": scores, "insensitive": insensitive[gi]})
+        scores = [s[gi].row(best) for s in res2] if improved else None
+        out.append(LinearStep(before, float(min(mse[best], before)), improved, scores, insensitive[gi]))
     return out
 
 
@@ -235,7 +273,7 @@ def confidence_intervals(evaluator, ss: SegmentSet, base: list[Effect], group: G
     h = np.where(u0 + 0.01 > 1.0, -0.01, 0.01)
     pts = np.vstack([u0] + [u0 + np.eye(k)[i] * h[i] for i in range(k)])
     (res,) = evaluate_groups(evaluator, [ss], base, [group], [pts])
-    _, _, sim = res[0]
+    sim = res[0].sim
     group.apply(u0)
     mask = ss.mask
     y0 = sim[0][mask]

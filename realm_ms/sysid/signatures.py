@@ -47,13 +47,6 @@ class Features:
     def worst_joint(self) -> int:
         return int(np.argmax(self.rms))
 
-    def sentence_for(self, effect, values: dict[str, float]) -> str:
-        fn = SENTENCES.get(effect.name)
-        size = effect.describe(values, max_items=2)
-        if fn is None:
-            return f"{effect.summary}: {size}"
-        return fn(self, effect, values, size)
-
     def to_dict(self) -> dict:
         keys = ("corr_sign", "corr_vel", "corr_acc", "corr_grav", "corr_err", "slow_fast", "mean", "rms",
                 "hold_rms", "move_rms", "lag_s")
@@ -239,6 +232,15 @@ SENTENCES: dict[str, Callable] = {
     "backlash": _backlash,
     "encoder_bias": _bias,
 }
+
+
+def evidence(effect, values: dict[str, float], features: Features) -> str:
+    """One sentence for the diagnosis: what in the residual points at ``effect`` (``SENTENCES``, by
+    effect name) and how big it is; an effect without a sentence gets its summary."""
+    fn = SENTENCES.get(effect.name)
+    if fn is None:
+        return f"{effect.summary}: {effect.describe(values)}"
+    return fn(features, effect, values, effect.describe(values, max_items=2))
 
 
 def noise_floor(segset, residual: np.ndarray) -> tuple[float, np.ndarray]:

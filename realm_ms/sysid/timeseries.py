@@ -83,9 +83,9 @@ def check_torque_rate(traj: "Trajectory") -> None:
                         f"{rate / 2:.3g} Hz). Log torques faster, or use --space position (the replay of q_cmd, if the log has it)")
 
 
-def check_identifiable(trajs: list["Trajectory"], space: str) -> None:
-    """DataError "nothing to identify" for data no verdict can come from: an arm that never moves,
-    or (torque space) a joint torque that never varies (a zero column: the sensor was not logged)."""
+def check_identifiable(trajs: list["Trajectory"]) -> None:
+    """DataError "nothing to identify" for data no verdict can come from: an arm that never moves
+    (the space adds its own checks: ``Space.check_identifiable``)."""
     def ptp(a):
         return np.ptp(a, axis=0) if a is not None and len(a) else np.zeros(7)
 
@@ -93,13 +93,6 @@ def check_identifiable(trajs: list["Trajectory"], space: str) -> None:
         raise DataError(f"nothing to identify: the arm never moves (every joint's q and q_cmd vary by < "
                         f"{1e3 * MIN_MOTION_RAD:g} mrad in all {len(trajs)} trajectories); record motion, e.g. the "
                         "commands of `realm sysid excite`")
-    if space == "torque":
-        flat = [j for j in range(7) if all(ptp(tr.tau)[j] == 0 for tr in trajs)]
-        if flat:
-            value = float(trajs[0].tau[0, flat[0]])
-            raise DataError(f"nothing to identify in torque space: tau of joint(s) {', '.join(str(j + 1) for j in flat)} "
-                            f"is {value:g} N·m throughout every trajectory (not logged?); log the joint torques, or "
-                            "use --space position (the replay of q_cmd)")
 
 
 @dataclass

@@ -27,6 +27,3 @@ class Armature(Effect):
 
     def build_target(self, target, row):
         target.add_armature(self.theta[row, self._slices["ia"]].cpu().numpy().astype(np.float64))
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

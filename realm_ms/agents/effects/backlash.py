@@ -37,6 +37,3 @@ class Backlash(Effect):
         width = torch.as_tensor(self.config.torque_width, device=q.device, dtype=q.dtype)
         side = torch.tanh(model_gravity(state, rows) / width)
         return q + scatter_rows(q, rows, self.p("half_gap", q, rows) * side), qd
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

@@ -55,6 +55,3 @@ class CoulombFriction(ImplicitJointTorque):
             level = None if bool(fa.any()) else torch.clamp(fc, min=0)
             c = self._level_cache = (fc, fa, level, None if level is None else -level)
         return c[2], c[3]
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

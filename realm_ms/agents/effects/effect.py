@@ -168,10 +168,7 @@ class Effect(ActuationStage):
         """Apply this effect's values (theta row ``row``) to one articulation."""
 
     # ------------------------------------------------------------------ diagnosis
-    def evidence(self, values: dict[str, float], features: "Any") -> str:
-        """One sentence: what in the residual points at this effect, and how big it is."""
-        return f"{self.summary}: {self.describe(values)}"
-
+    # (the evidence sentence of each effect lives in ``sysid/signatures.SENTENCES``, by effect name)
     def describe(self, values: dict[str, float], max_items: int = 3) -> str:
         """Largest parameters (relative to their nominal size) with units, e.g. '0.31 N·m on joint 4'."""
         items = []

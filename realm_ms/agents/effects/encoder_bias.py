@@ -25,6 +25,3 @@ class EncoderBias(Effect):
 
     def measure(self, q, qd, state):
         return q + self.p("bias", q), qd
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

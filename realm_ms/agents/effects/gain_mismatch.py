@@ -28,6 +28,3 @@ class GainMismatch(Effect):
         from realm_ms.agents.control import BatchedGains
 
         return BatchedGains(gains.kq * ks, gains.kqd * kd, gains.kx * ks, gains.kxd * kd)
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

@@ -24,6 +24,3 @@ class GravityCompError(Effect):
         if rows is not None and rows.numel() == 0:
             return tau
         return tau + scatter_rows(tau, rows, self.p("scale", tau, rows) * model_gravity(state, rows))
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

@@ -44,6 +44,3 @@ class Latency(Effect):
         env = torch.arange(q_target.shape[0], device=q_target.device)
         a, b = self._hist[k, env], self._hist[k + 1, env]
         return a + frac * (b - a)
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

@@ -172,6 +172,3 @@ class LuGreFriction(ImplicitJointTorque):
         """The torque that keeps each joint sliding at v once the bristle has settled: g(v) sign(v) + σ₂ v."""
         fc, fs, vs, _, _, s2 = self._params(v, None)
         return sliding_level(v, fc, fs, vs) * torch.sign(v) + s2 * v
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

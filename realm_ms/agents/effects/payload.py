@@ -84,6 +84,3 @@ class Payload(Effect):
         com = np.array([v[f"com_{ax}"] for ax in "xyz"])
         sigma = v["mass"] * np.diag([v[f"gyr_{ax}"] ** 2 for ax in "xyz"])
         target.add_body(v["mass"], com, np.trace(sigma) * np.eye(3) - sigma)
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

@@ -110,6 +110,3 @@ class SmoothFriction(ImplicitJointTorque):
         fc, vs, v0 = self.p("fc", v_free, rows), self.p("vs", v_free, rows), self.p("v0", v_free, rows)
         v = backward_euler_velocity(v_free, inertia / state.dt, fc, vs, v0)
         return -friction(v, fc, vs, v0)
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

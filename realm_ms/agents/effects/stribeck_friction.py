@@ -32,6 +32,3 @@ class StribeckFriction(ImplicitJointTorque):
         f = fs * (ratio + (1 - ratio) * torch.exp(-((speed / vs) ** 2)))
         stop = inertia * v_free / state.dt
         return -torch.maximum(torch.minimum(stop, f), -f)
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

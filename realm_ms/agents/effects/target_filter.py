@@ -40,6 +40,3 @@ class TargetFilter(Effect):
         alpha = -torch.expm1(-state.dt / tau.clamp_min(1e-9))
         self._state = torch.where(tau > 0, self._state + alpha * (q_target - self._state), q_target)
         return self._state
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

@@ -46,6 +46,3 @@ class TorqueLimit(Effect):
         tau = self._prev + torch.maximum(torch.minimum(tau - self._prev, step), -step)
         self._prev = tau
         return tau
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

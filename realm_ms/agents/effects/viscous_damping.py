@@ -33,6 +33,3 @@ class ViscousDamping(ImplicitJointTorque):
     def friction_torque(self, v_free, inertia, state, rows):
         b = self.p("b", v_free, rows)
         return -b * v_free / (1.0 + state.dt * b / inertia)
-
-    def evidence(self, values, features):
-        return features.sentence_for(self, values)

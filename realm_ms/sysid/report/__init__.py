@@ -78,7 +78,7 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
             groups.append(Group.of(effects[:k] + effects[k + 1:]))
             pts.append(groups[-1].u[None])
     r_tr, r_he = evaluate_groups(evaluator, [tr_ss, he_ss], [], groups, pts)
-    rep = lambda label, ss, r: Replay(label, ss, r[2][0])  # noqa: E731
+    rep = lambda label, ss, r: Replay(label, ss, r.sim[0])  # noqa: E731
     name = "model" if model.effects else "nominal"
     d = ReportData(name, data_name, rep("nominal", tr_ss, r_tr[0]), rep("nominal", he_ss, r_he[0]),
                    rep(name, tr_ss, r_tr[1]), rep(name, he_ss, r_he[1]), {}, 0.0, model=model, fit=fit_result,
@@ -87,14 +87,14 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
     d.noise_floor = float(min(floors))
     d.context = _context(he_ss, evaluator.sim.model if evaluator.device == "cpu" else _arm(), model.gains)
     if effects:
-        wf = [("nominal", float(np.sqrt(r_he[0][0][0])))]
+        wf = [("nominal", r_he[0].rmse)]
         for k in range(1, len(effects)):
-            wf.append(("+ " + effects[k - 1].name, float(np.sqrt(r_he[k + 1][0][0]))))
-        wf.append(("+ " + effects[-1].name if len(effects) > 1 else "+ " + effects[0].name, float(np.sqrt(r_he[1][0][0]))))
+            wf.append(("+ " + effects[k - 1].name, r_he[k + 1].rmse))
+        wf.append(("+ " + effects[-1].name if len(effects) > 1 else "+ " + effects[0].name, r_he[1].rmse))
         d.waterfall = wf
         if waterfall and len(effects) > 1:
             first = len(effects) + 1
-            d.leave_one_out = [("- " + fx.name, float(np.sqrt(r_he[first + k][0][0]))) for k, fx in enumerate(effects)]
+            d.leave_one_out = [("- " + fx.name, r_he[first + k].rmse) for k, fx in enumerate(effects)]
     if diagnosis is None:
         log("diagnosing what is still missing")
         diagnosis = diagnose(train, heldout, model, evaluator=evaluator, log=log).to_json()

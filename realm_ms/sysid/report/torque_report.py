@@ -1,7 +1,7 @@
 """``realm sysid report`` on torque logs: per-joint measured vs model torque residual overlays (N·m).
 
 The residual is the inverse dynamics of the URDF at the measured state, ``tau − ID(q, q̇, q̈)``
-(``sysid/torque/space.py``); the model's terms should reproduce it. Sections: per-joint held-out
+(``sysid/torque/residual.py``); the model's terms should reproduce it. Sections: per-joint held-out
 RMSE (nominal, model, noise floor), overlays of the measured residual and the model's terms on the
 first held-out trajectory, the residual left by frequency band, residual left vs q̇, and the ``auto``
 waterfall / friction curves.
@@ -22,8 +22,7 @@ UNIT = "N·m"
 
 
 def torque_sections(train, held, model=None, auto=None) -> list[tuple[str, str]]:
-    from realm_ms.sysid.torque.space import TorqueSet, predict, residual_bands, rmse, torque_arm
-    from realm_ms.sysid.torque.verbs import terms_of
+    from realm_ms.sysid.torque.residual import TorqueSet, predict, residual_bands, rmse, terms_of, torque_arm
 
     arm = torque_arm()
     terms = terms_of(model, log=lambda *a: None)

@@ -1,190 +1,304 @@
-"""Compare, diagnose, fit and iterate in torque space: the inverse-dynamics residual.
+"""Torque space: the workbench's verbs on the inverse-dynamics residual of measured ``tau`` (N·m).
 
-Data: trajectories with measured joint torque ``tau`` (N·m) from any controller (``q_cmd`` not
-needed). ``q̈`` and the consistently smoothed torque come from ``smoothing.smooth`` (Savitzky-Golay).
-The residual ``r = tau - ID(q, q̇, q̈) - Σ terms`` (``terms.py``) is scored per joint in N·m; the
-first and last window of every trajectory (where the SG fit extrapolates) are not scored.
-
-Fitting is a bounded nonlinear least squares (``scipy.optimize.least_squares``, trust region
-reflective) in the parameters' unit coordinates, from the off-values and from the typical
-strengths (the better wins): no simulation, so a diagnosis fits every candidate fully.
-
-Noise floor: the sensor noises propagated through the smoothing (``smoothing.noise_floor``).
+``TorqueSpace`` answers ``compare``, ``diagnose``, ``fit`` and ``auto``'s steps (``sysid/space.py``
+names what a space provides) with the residual, terms and least squares of ``residual.py``; its
+results are ``TorqueCompare`` and ``TorqueFit`` (``diagnose`` gives the shared ``Diagnosis``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-import torch
 
 from realm_ms.errors import InputError
-from realm_ms.sysid.timeseries import Trajectory, check_torque_rate
-from realm_ms.sysid.torque.smoothing import SmoothingConfig, noise_floor, smooth
-from realm_ms.sysid.torque.terms import EXTRA_SPECS, TERMS, TRACKING_ONLY, Samples, Series
+from realm_ms.sysid.timeseries import Trajectory
+from realm_ms.sysid.torque.residual import UNIT, Term, TorqueSet, fit_terms, residual_bands, rmse, terms_of, torque_arm
+from realm_ms.sysid.torque.terms import TERMS, TRACKING_ONLY
 
-UNIT = "N·m"
+MAX_FIT_SAMPLES = 6000  # train samples the least squares sees (evenly thinned); held-out uses all
+#: configured variants screened beside the library candidates: a link's CoM moves the torque in ways
+#: no mass scale can (a regressor product per evaluation, so 28 parameters screen in seconds)
+SCREENED_VARIANTS = ("link_mass:fit_com=true",)
 
 
 @dataclass
-class TorqueSet:
-    """Scored samples of a list of trajectories: measured torque and the nominal residual."""
+class TorqueCompare:
+    """``compare`` in torque space: the inverse-dynamics residual of every trajectory (N·m)."""
 
-    samples: Samples
-    tau: np.ndarray  # (N, 7)
-    nominal: np.ndarray  # (N, 7) ID of the URDF at the smoothed state
-    noise: np.ndarray  # (7,) noise-floor estimate per joint
-    lengths: list[int] = field(default_factory=list)  # scored samples per trajectory (unthinned sets)
-    dt: float = 0.0  # median sample interval, s
+    rmse: float
+    per_joint_rmse: list[float]
+    noise_floor: float
+    noise_floor_per_joint: list[float]
+    samples: int
+    residual_bands: dict
+    unit = UNIT
 
-    @classmethod
-    def build(cls, trajs: list[Trajectory], arm, smoothing: SmoothingConfig = SmoothingConfig(),
-              max_samples: int | None = None) -> "TorqueSet":
-        parts, noise_var, weights, dts, series = [], [], [], [], []
-        for tr in trajs:
-            if tr.tau is None:
-                raise InputError(f"{tr.name}: no `tau` (measured joint torque, N·m); torque-space work needs it")
-            check_torque_rate(tr)
-            sm = smooth(tr.t, tr.q, tr.tau, tr.qd, smoothing)
-            dt = float(np.median(np.diff(tr.t)))
-            dts.append(dt)
-            cut = max(1, int(round(smoothing.window_s / dt)))  # SG extrapolates near the ends
-            sl = slice(cut, len(sm.tau) - cut)
-            if sl.stop - sl.start < 10:
-                raise InputError(f"{tr.name}: too short for torque space ({len(tr.t)} samples)")
-            parts.append((sm.q[sl], sm.qd[sl], sm.qdd[sl], sm.tau[sl]))
-            series.append(Series(torch.as_tensor(sm.qd, dtype=torch.float64), dt, sl))
-            qt = torch.as_tensor(sm.q[sl][:: max(1, (sl.stop - sl.start) // 200)], dtype=torch.float64)
-            with torch.inference_mode():
-                msq = (arm.mass_matrix(qt) ** 2).mean(0).numpy()
-            noise_var.append(noise_floor(sm, msq) ** 2)
-            weights.append(sl.stop - sl.start)
-        q, v, a, tau = (np.concatenate([p[i] for p in parts]) for i in range(4))
-        lengths, idx = list(weights), None
-        if max_samples and len(q) > max_samples:  # evenly thinned: the fit needs coverage, not every ms
-            idx = np.linspace(0, len(q) - 1, max_samples).astype(int)
-            q, v, a, tau = q[idx], v[idx], a[idx], tau[idx]
-            lengths = []  # thinned: no longer contiguous time series
-        t64 = lambda x: torch.as_tensor(x, dtype=torch.float64)  # noqa: E731
-        s = Samples(t64(q), t64(v), t64(a), arm, series=series, index=None if idx is None else torch.as_tensor(idx))
-        with torch.inference_mode():
-            nominal = arm.rnea(s.q, s.qd, s.qdd).numpy()
-        noise = np.sqrt(np.average(np.array(noise_var), axis=0, weights=weights))
-        return cls(s, tau, nominal, noise, lengths, float(np.median(dts)))
+    def to_json(self) -> dict:
+        return {"unit": UNIT, "rmse_nm": self.rmse, "per_joint_rmse_nm": self.per_joint_rmse,
+                "noise_floor_nm": self.noise_floor, "noise_floor_per_joint_nm": self.noise_floor_per_joint,
+                "samples": self.samples, "residual_bands": self.residual_bands}
+
+    def lines(self) -> list[str]:
+        """The terminal summary: residual RMSE per joint and by frequency band."""
+        return [f"torque space ({self.samples} samples): inverse-dynamics residual RMSE {self.rmse:.3e} N·m, "
+                f"noise floor ≈ {self.noise_floor:.2e} N·m",
+                "joint       " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)),
+                "RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in self.per_joint_rmse)] + band_lines(self.residual_bands)
 
 
-def torque_arm():
-    from realm_ms.sysid.diagnose import _arm_model
-
-    return _arm_model().to(dtype=torch.float64)
-
-
-# ---------------------------------------------------------------------------- parameters
 @dataclass
-class Term:
-    """One effect in torque space: name, config, and its free parameters (key -> spec)."""
+class TorqueFit:
+    """``fit`` in torque space: least squares of the added (and, with refit, the model's) terms."""
 
-    name: str
-    config: object
-    specs: list  # [(key, ParamSpec)]
-    values: dict[str, float] = field(default_factory=dict)
+    model: object  # RobotModel
+    terms: list[Term]
+    effects: list[str]
+    params: dict[str, float]
+    before: dict  # {train_rmse_nm, heldout_rmse_nm, per_joint_heldout_rmse_nm}
+    after: dict
+    noise_floor: float
+    residual_bands: dict
+    split: dict | None = None
+    unit = UNIT
 
-    @classmethod
-    def make(cls, name: str, values: dict | None = None, config: dict | None = None) -> "Term":
-        """``config``: the effect's settings (e.g. ``{"fit_com": True}`` for link_mass), as a dict."""
-        if name in TRACKING_ONLY:
-            raise InputError(f"{name} acts through the position controller (tracking): it needs `q_cmd` in the data; "
-                             "in torque space use friction, viscous, armature, payload, gravity or link-mass effects")
-        if name not in TERMS:
-            raise InputError(f"unknown torque-space effect {name!r}; known: {', '.join(TERMS)}")
-        if name in EXTRA_SPECS:
-            specs, config = EXTRA_SPECS[name], None
-        else:
-            from realm_ms.agents.effects import make_effect
+    @property
+    def heldout_after(self) -> float:
+        return float(self.after["heldout_rmse_nm"])
 
-            fx = make_effect(name, None, config)
-            specs, config = fx.specs, fx.config
-        keys = []
-        for sp in specs:
-            if not sp.fit_by_default:
-                continue
-            if sp.per_joint:
-                keys += [(f"{sp.name}{j + 1}", sp) for j in sp.joints]
-            else:
-                keys.append((sp.name, sp))
-        t = cls(name, config, keys, {k: sp.off for k, sp in keys})
-        if values:
-            t.values.update({k: float(v) for k, v in values.items() if k in t.values})
-        return t
+    def to_json(self) -> dict:
+        out = {"unit": UNIT, "effects": self.effects, "params": self.params, "before": self.before, "after": self.after,
+               "noise_floor_nm": self.noise_floor, "residual_bands": self.residual_bands,
+               "at_bounds": self.model.params_at_bounds()}
+        if self.split is not None:
+            out["split"] = self.split
+        return out
 
-    def config_dict(self) -> dict:
-        from dataclasses import asdict
+    def lines(self) -> list[str]:
+        """The terminal summary: fitted values, per-joint held-out RMSE, residual by band."""
+        from realm_ms.sysid.fit import at_bounds_lines
 
-        return {} if self.config is None else {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self.config).items()}
-
-    def nominal_values(self) -> dict[str, float]:
-        return {k: sp.nominal for k, sp in self.specs}
-
-    def torque(self, s: Samples) -> np.ndarray:
-        with torch.inference_mode():
-            return TERMS[self.name](self.values, s, self.config).numpy()
+        out = [f"  {k:<32} {v:.5g}" for k, v in self.params.items()]
+        for when, m in (("before", self.before), ("after", self.after)):
+            out.append(f"{when:<6} held-out [N·m] " + " ".join(f"{v:9.3f}" for v in m["per_joint_heldout_rmse_nm"])
+                       + f"  {m['heldout_rmse_nm']:9.3f}   (train {m['train_rmse_nm']:.3f})")
+        return out + band_lines(self.residual_bands) + at_bounds_lines(self.model.params_at_bounds())
 
 
-def _pack(terms: list[Term]):
-    keys = [(t, k, sp) for t in terms for k, sp in t.specs]
-    lo = np.array([sp.lo for _, _, sp in keys])
-    hi = np.array([sp.hi for _, _, sp in keys])
-    return keys, lo, hi
+def band_lines(b: dict) -> list[str]:
+    """Torque residual per frequency band (``torque/spectrum.py``), as terminal lines."""
+    return (["by band     " + " ".join(f"{'J' + str(i):>9}" for i in range(1, 8)) + "    share"]
+            + [f"{name:<11} " + " ".join(f"{v:9.3f}" for v in row) + f"   {100 * share:5.1f}%"
+               for name, row, share in zip(b["bands"], b["rms_per_joint"], b["share"])])
 
 
-def _set(keys, x):
-    for (t, k, sp), v in zip(keys, x):  # clipped: lo + u (hi - lo) at u = 0 can round just below lo
-        t.values[k] = float(min(max(v, sp.lo), sp.hi))
+def _errors(ts_tr: TorqueSet, ts_he: TorqueSet, terms: list[Term]) -> dict:
+    tr, _ = rmse(ts_tr, terms)
+    he, per = rmse(ts_he, terms)
+    return {"train_rmse_nm": tr, "heldout_rmse_nm": he, "per_joint_heldout_rmse_nm": [float(x) for x in per]}
 
 
-def predict(terms: list[Term], s: Samples, n: int) -> np.ndarray:
-    out = np.zeros((n, 7))
-    for t in terms:
-        out += t.torque(s)
+def model_of(terms: list[Term], base=None):
+    """A MODEL.yaml for the terms, keeping the tracking effects of ``base``."""
+    from realm_ms.agents.effects import make_effect
+    from realm_ms.agents.robot_model import RobotModel
+
+    base = (base or RobotModel()).copy()
+    keep = [fx for fx in base.effects if fx.name in TRACKING_ONLY]
+    fx = [make_effect(t.name, t.values, t.config_dict()) for t in terms]
+    return RobotModel(sorted(keep + fx, key=lambda f: f.order), base.gains, base.joint_physics, base.physics_hz,
+                      dict(base.provenance))
+
+
+def _copy(terms: list[Term]) -> list[Term]:
+    return [Term.make(t.name, dict(t.values), t.config_dict()) for t in terms]
+
+
+def _base(spec: str) -> str:
+    """Effect name of a candidate spec (``link_mass:fit_com=true`` -> ``link_mass``)."""
+    return spec.split(":", 1)[0]
+
+
+def parse_terms(spec: str) -> list[Term]:
+    """Terms of an ``--add``-style spec, e.g. ``link_mass:link=4,fit_com=true,s4=0.1``: the effect's
+    config keys set its config, the others start its free parameters."""
+    from dataclasses import fields
+
+    from realm_ms.agents.effects import EFFECTS
+    from realm_ms.sysid.effect_spec import _value, split_specs
+
+    out = []
+    for name, kv in split_specs(spec):
+        cfg_names = {f.name for f in fields(EFFECTS.get(name).Config)} if name in EFFECTS else set()
+        t = Term.make(name, config={k: _value(v, k) for k, v in kv.items() if k in cfg_names})
+        kv = {k: v for k, v in kv.items() if k not in cfg_names}
+        unknown = [k for k in kv if k not in t.values]
+        if unknown:
+            raise InputError(f"{name}: unknown or fixed parameter(s) {unknown} in torque space; free: {list(t.values)}")
+        t.values.update({k: float(_value(v, k)) for k, v in kv.items()})
+        out.append(t)
     return out
 
 
-def rmse(ts: TorqueSet, terms: list[Term]) -> tuple[float, np.ndarray]:
-    r = ts.tau - ts.nominal - predict(terms, ts.samples, len(ts.tau))
-    return float(np.sqrt(np.mean(r**2))), np.sqrt(np.mean(r**2, axis=0))
+class TorqueSpace:
+    """Torque space: the inverse-dynamics residual of measured ``tau`` (N·m, any controller, no
+    ``q_cmd`` needed). Every candidate is fitted in full by least squares (no simulation), so the
+    diagnosis's values are a fit: ``auto`` keeps them instead of fitting again."""
 
+    name = "torque"
+    unit = UNIT
 
-def residual_bands(ts: TorqueSet, terms: list[Term]) -> dict:
-    """The residual left by ``terms`` split into frequency bands (``spectrum.py``)."""
-    from realm_ms.sysid.torque.spectrum import band_rms, summary
+    def __init__(self, train: list[Trajectory], heldout: list[Trajectory]):
+        self.train, self.heldout = train, heldout
+        self._sets: tuple[TorqueSet, TorqueSet] | None = None
 
-    if not ts.lengths:
-        raise ValueError("residual bands need an unthinned sample set (contiguous time series)")
-    r = ts.tau - ts.nominal - predict(terms, ts.samples, len(ts.tau))
-    return summary(band_rms(r, ts.lengths, ts.dt))
+    @classmethod
+    def build(cls, train, heldout, model=None, workers=None, device=None, progress: bool = True) -> "TorqueSpace":
+        """No simulation: workers, device and progress do not apply."""
+        return cls(train, heldout)
 
+    @staticmethod
+    def suits(trajs: list[Trajectory]) -> bool:
+        return all(t.tau is not None for t in trajs)
 
-def fit_terms(train: TorqueSet, terms: list[Term], starts: tuple[str, ...] = ("current", "nominal")) -> float:
-    """Least squares of all free parameters of ``terms`` on ``train`` (in place); train RMSE."""
-    from scipy.optimize import least_squares
+    @staticmethod
+    def check(trajs: list[Trajectory]) -> None:
+        from realm_ms.sysid.timeseries import DataError
 
-    keys, lo, hi = _pack(terms)
-    if not keys:
-        return rmse(train, terms)[0]
-    span = hi - lo
-    target = train.tau - train.nominal
+        no_tau = [t.name for t in trajs if t.tau is None]
+        if no_tau:
+            has_q_cmd = all(t.q_cmd is not None for t in trajs)
+            raise DataError(f"{no_tau[0]}: no tau (measured joint torque, N·m); torque space needs it "
+                            + ("(or use --space position: the data has q_cmd)" if has_q_cmd else "in every trajectory"))
 
-    def resid(u):
-        _set(keys, lo + u * span)
-        return (target - predict(terms, train.samples, len(target))).ravel()
+    @staticmethod
+    def check_identifiable(trajs: list[Trajectory]) -> None:
+        """A joint torque that never varies (a zero column: the sensor was not logged) identifies nothing."""
+        from realm_ms.sysid.timeseries import DataError
 
-    best = None
-    for start in starts:
-        x0 = np.array([t.values[k] if start == "current" else sp.nominal for t, k, sp in keys])
-        u0 = np.clip((x0 - lo) / span, 0, 1)
-        sol = least_squares(resid, u0, bounds=(0, 1), method="trf", x_scale=1.0, max_nfev=60)
-        if best is None or sol.cost < best.cost:
-            best = sol
-    _set(keys, lo + best.x * span)
-    return rmse(train, terms)[0]
+        flat = [j for j in range(7) if all(np.ptp(tr.tau[:, j]) == 0 for tr in trajs)]
+        if flat:
+            value = float(trajs[0].tau[0, flat[0]])
+            raise DataError(f"nothing to identify in torque space: tau of joint(s) {', '.join(str(j + 1) for j in flat)} "
+                            f"is {value:g} N·m throughout every trajectory (not logged?); log the joint torques, or "
+                            "use --space position (the replay of q_cmd)")
+
+    def sets(self) -> tuple[TorqueSet, TorqueSet]:
+        """Train (thinned for the least squares) and held-out sample sets, built once."""
+        if self._sets is None:
+            arm = torque_arm()
+            self._sets = (TorqueSet.build(self.train, arm, max_samples=MAX_FIT_SAMPLES), TorqueSet.build(self.heldout, arm))
+        return self._sets
+
+    @staticmethod
+    def replay_floor(cfg) -> float:
+        """No simulation: the judging floor is the noise floor."""
+        return 0.0
+
+    @staticmethod
+    def floor(ts: TorqueSet) -> float:
+        return float(np.sqrt(np.mean(ts.noise**2)))
+
+    def library(self) -> list[str]:
+        """The effects this space can model."""
+        return [n for n in TERMS if n not in TRACKING_ONLY]
+
+    def candidates(self, cfg, given=None) -> list[str]:
+        """``given``, else the config's library candidates + those position space screens only on
+        request (link_mass: cheap here, a regressor fit) + ``SCREENED_VARIANTS``."""
+        from realm_ms.agents.effects import EFFECTS
+
+        if given is not None:
+            return list(given)
+        return [n for n in TERMS if n in cfg.candidates or not EFFECTS.get(n).screened] + list(SCREENED_VARIANTS)
+
+    def screened(self, cfg) -> list[str]:
+        """Effect names the default diagnosis screens (``auto``'s contenders and its left-out note)."""
+        return [_base(n) for n in self.candidates(cfg)]
+
+    # ------------------------------------------------------------------ verbs
+    def compare(self, model=None, **_) -> TorqueCompare:
+        ts = TorqueSet.build(self.train + self.heldout, torque_arm())
+        terms = terms_of(model, log=lambda *a: None)
+        total, per = rmse(ts, terms)
+        return TorqueCompare(total, [float(x) for x in per], self.floor(ts), [float(x) for x in ts.noise], len(ts.tau),
+                             residual_bands(ts, terms))
+
+    def diagnose(self, model=None, config=None, log=print, candidates=None):
+        from realm_ms.sysid.diagnose import DiagnoseConfig, Diagnosis, Suspect, judge_verdict, unscreened
+
+        cfg = config or DiagnoseConfig()
+        tr, he = self.sets()
+        base_terms = terms_of(model, log)
+        present = {t.name for t in base_terms}
+        names = [n for n in self.candidates(cfg, candidates) if _base(n) not in present and _base(n) not in TRACKING_ONLY]
+        base_tr, _ = rmse(tr, base_terms)
+        base_he, per_he = rmse(he, base_terms)
+        floor = self.floor(he)
+        log(f"torque space: baseline held-out RMSE {base_he:.3e} {UNIT}, noise floor ≈ {floor:.2e} {UNIT}")
+        suspects = []
+        for n in names:
+            terms = _copy(base_terms) + parse_terms(n)
+            after_tr = fit_terms(tr, terms)
+            after_he, _ = rmse(he, terms)
+            new = terms[-1]
+            retuned = {f"{t.name}.{k}": round(v, 9) for t in terms[:-1] for k, v in t.values.items()}
+            sc = (base_he - after_he) / base_he if base_he > 0 else 0.0
+            suspects.append(Suspect(n, sc, after_he, after_tr, {k: round(v, 9) for k, v in new.values.items()},
+                                    f"{n}: inverse-dynamics residual fitted by least squares", retuned_model_params=retuned))
+        suspects.sort(key=lambda s: -s.score)
+        left_out = unscreened({_base(n) for n in names}, present, self.library())
+        verdict, msg, judge = judge_verdict(base_he, floor, suspects, cfg, unit=UNIT, left_out=left_out,
+                                            replay_floor=self.replay_floor(cfg))
+        return Diagnosis(base_he, base_tr, floor, he.noise, per_he, suspects, msg, verdict, judge, unit=UNIT)
+
+    def fit(self, model=None, config=None, log=print) -> TorqueFit:
+        """``config``: a ``fit.FitConfig``; its ``add`` and ``refit`` apply (no CMA-ES here)."""
+        from realm_ms.sysid.fit import FitConfig
+
+        cfg = config or FitConfig()
+        refit = cfg.refit
+        tr, he = self.sets()
+        base_terms = terms_of(model, log)
+        added = parse_terms(cfg.add)
+        clash = [t.name for t in added if t.name in {b.name for b in base_terms}]
+        if clash:
+            raise InputError(f"{', '.join(clash)} already in the model; drop it from --add")
+        if not added:
+            raise InputError("nothing to fit: give effects with --add")
+        before = _errors(tr, he, base_terms)
+        fitted = (base_terms if refit else []) + added
+        fit_terms(tr, fitted)
+        terms = (base_terms if refit else _copy(base_terms)) + added
+        after = _errors(tr, he, terms)
+        log(f"torque space: held-out RMSE {before['heldout_rmse_nm']:.3e} -> {after['heldout_rmse_nm']:.3e} {UNIT}")
+        params = {f"{t.name}.{k}": float(v) for t in fitted for k, v in t.values.items()}
+        return TorqueFit(model_of(terms, model), terms, [t.name for t in fitted], params, before, after,
+                         self.floor(he), residual_bands(he, terms))
+
+    def fit_suspect(self, model, suspect, config, log=print) -> TorqueFit:
+        """``auto``'s step: the diagnosis already fitted the suspect jointly with the model's terms
+        (a full least squares), so its values are taken as they are."""
+        tr, he = self.sets()
+        terms = terms_of(model, log)
+        new = parse_terms(suspect.effect)[0]
+        new.values.update({k: v for k, v in suspect.params.items() if k in new.values})
+        for t in terms:
+            t.values.update({k.split(".", 1)[1]: v for k, v in suspect.retuned_model_params.items()
+                             if k.split(".", 1)[0] == t.name})
+        terms = terms + [new]
+        params = {f"{t.name}.{k}": round(v, 9) for t in terms for k, v in t.values.items()}
+        after = {"heldout_rmse_nm": rmse(he, terms)[0]}
+        return TorqueFit(model_of(terms, model), terms, [t.name for t in terms], params, {}, after, self.floor(he), {})
+
+    def details(self, diagnosis, model) -> tuple[dict, str]:
+        """``auto``'s space-specific details and a note on what is left (high-frequency residual)."""
+        from realm_ms.sysid.torque.spectrum import high_frequency_note
+
+        bands = residual_bands(self.sets()[1], terms_of(model, log=lambda *a: None))
+        return {"space": self.name, "residual_bands": bands}, high_frequency_note(bands)
+
+    def report(self, model, out, data_name: str, auto=None, **_) -> "Path":
+        from realm_ms.sysid.report.torque_report import build_torque_report
+
+        return build_torque_report(self.train, self.heldout, model, out, data_name, auto)

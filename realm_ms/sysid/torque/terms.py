@@ -24,7 +24,8 @@ sample set, so a fit of inertial parameters costs no dynamics evaluations.
 
 eps = 0.01 rad/s (the smooth sign). Tracking effects (latency, target_filter, gain_mismatch, torque_limit,
 backlash, encoder_bias) act through the position controller and have no torque-space form: they
-need ``q_cmd`` (``TRACKING_ONLY``).
+need ``q_cmd`` (``TRACKING_ONLY``: the library effects without a term here). ``TERMS`` is the one
+table of each effect's torque; its evidence sentence is ``signatures.SENTENCES``.
 """
 
 from __future__ import annotations
@@ -34,10 +35,9 @@ from typing import Callable
 
 import torch
 
-from realm_ms.agents.effects.parameter import ParamSpec
+from realm_ms.agents.effects import EFFECTS
 
 EPS = 0.01  # rad/s, smooth sign of the friction laws
-TRACKING_ONLY = ("latency", "target_filter", "gain_mismatch", "torque_limit", "backlash", "encoder_bias")
 
 
 @dataclass
@@ -190,5 +190,6 @@ TERMS: dict[str, Callable] = {
     "armature": armature, "payload": payload, "gravity_comp_error": gravity_error, "link_mass": link_mass,
 }
 
-#: torque-space-only parameter specs (effects not in the simulation library; none at present)
-EXTRA_SPECS: dict[str, list[ParamSpec]] = {}
+#: library effects with no torque-space term: they act through the position controller (tracking)
+#: and need ``q_cmd`` in the data
+TRACKING_ONLY = tuple(n for n in EFFECTS if n not in TERMS)
