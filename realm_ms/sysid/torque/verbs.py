@@ -208,6 +208,8 @@ def auto(train, held, model=None, config=None, log=print) -> dict:
         terms, current = trial, after
         steps.append({"effect": s["effect"], "params": {f"{t.name}.{k}": round(v, 9) for t in terms
                                                          for k, v in t.values.items()}, "heldout_rmse": after})
+        if current <= dcfg.found_factor * floor or len(steps) >= cfg.max_steps:
+            break  # done: a re-diagnosis (the costly joint refits) would go unused, as in sysid/auto.py
         d = diagnose(train, held, model_of(terms, model), config=dcfg, log=quiet, sets=sets)
     verdict = "at_floor" if current <= dcfg.found_factor * floor else ("partially_explained" if steps else "unexplained")
     final_model = model_of(terms, model)
