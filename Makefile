@@ -12,13 +12,15 @@ demo: setup
 	$(PY) -m realm_ms.cli demo
 
 # the suite in TEST_WORKERS pytest-xdist processes, one test file per process at a time (a file's
-# module-scoped set-up, e.g. a trained checkpoint or a synthetic dataset, is built once)
+# module-scoped set-up, e.g. a trained checkpoint or a synthetic dataset, is built once), the long
+# files first (tests/conftest.py: LONG_FILES)
 TEST_WORKERS ?= 2
+XDIST := -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 test: setup
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
+	$(PY) -m pytest -q $(XDIST)
 
 test-slow: setup
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile -m slow --run-slow
+	$(PY) -m pytest -q $(XDIST) -m slow --run-slow
 
 bench: setup
 	$(PY) bench/step_rate.py

@@ -16,7 +16,22 @@ def pytest_addoption(parser):
     parser.addoption("--run-slow", action="store_true", default=False, help="run tests marked slow")
 
 
+#: the files that take minutes (a trained checkpoint, diagnose and fit runs, renders), longest first:
+#: the workers start on them, so that the suite does not end with one worker running a long file
+#: alone while the other idles (`make test` passes --no-loadscope-reorder, so this is the schedule)
+LONG_FILES = ("test_lerobot_example.py", "test_sysid_hidden.py", "test_lerobot_policy_transfer.py", "test_bad_inputs.py",
+              "test_sysid_torque.py", "test_expert.py", "test_perturbations_env.py", "test_sysid_link_mass.py",
+              "test_sysid_optimize.py", "test_rendering.py", "test_sysid_cli.py", "test_sysid_effects.py",
+              "test_tasks_env_pick_apple.py", "test_eval_batched.py", "test_tasks_envs.py", "test_tasks_env_reproducible.py")
+
+
+def _start_rank(item) -> int:
+    name = item.path.name
+    return LONG_FILES.index(name) if name in LONG_FILES else len(LONG_FILES)
+
+
 def pytest_collection_modifyitems(config, items):
+    items.sort(key=_start_rank)  # stable: each file's tests keep their order
     if config.getoption("--run-slow"):
         return
     skip = pytest.mark.skip(reason="slow: run with `make test-slow` (pytest --run-slow)")

@@ -20,7 +20,7 @@ def run(capsys, *argv):
 def data(tmp_path_factory):
     d = tmp_path_factory.mktemp("cli") / "data"
     assert main(["sysid", "synth", "--hidden", "latency:delay=0.02", "--out", str(d), "--seed", "1",
-                 "--n-train", "3", "--n-heldout", "2", "--duration", "5"]) == 0
+                 "--n-train", "3", "--n-heldout", "2", "--duration", "3"]) == 0
     return d
 
 

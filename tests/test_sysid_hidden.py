@@ -3,7 +3,7 @@ documented confound pair), fitting it brings the held-out RMSE to <= 1.5x the no
 >= 5x down from the start for a strong effect), parameters come back within 20 %, and data with
 no hidden effect yields "no missing effect".
 
-``make test`` runs a fast subset (small data: 3 + 2 trajectories x 6 s); ``make test-slow`` the
+``make test`` runs a fast subset (small data: 3 + 2 trajectories x 4 s); ``make test-slow`` the
 sweep over every effect x 3 seeds x {15 Hz, 100 Hz} logging, two-effect pairs and the null case at
 the bench size (7 + 3 trajectories x 10 s).
 """
@@ -49,7 +49,7 @@ def ev():
 
 
 def run_case(tmp_path, ev, hidden: str, seed: int, rate: float, small: bool, log=lambda *a: None):
-    size = dict(n_train=3, n_heldout=2, duration_s=6.0) if small else dict(n_train=7, n_heldout=3, duration_s=10.0)
+    size = dict(n_train=3, n_heldout=2, duration_s=4.0) if small else dict(n_train=7, n_heldout=3, duration_s=10.0)
     info = synth(hidden, tmp_path, SynthConfig(seed=seed, noise_rad=NOISE, rate_hz=rate, **size), evaluator=ev)
     train, held = load_split(tmp_path)
     d = diagnose(train, held, evaluator=ev, log=log)
