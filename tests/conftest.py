@@ -1,8 +1,11 @@
 """Shared test options: ``--run-slow`` enables tests marked ``slow`` (``make test-slow``)."""
 
 import os
+from pathlib import Path
 
 import pytest
+
+TESTS = Path(__file__).resolve().parent
 
 os.environ.setdefault("MS_SKIP_ASSET_DOWNLOAD_PROMPT", "1")
 if os.environ.get("PYTEST_XDIST_WORKER"):
@@ -19,14 +22,15 @@ def pytest_addoption(parser):
 #: the files that take minutes (a trained checkpoint, diagnose and fit runs, renders), longest first:
 #: the workers start on them, so that the suite does not end with one worker running a long file
 #: alone while the other idles (`make test` passes --no-loadscope-reorder, so this is the schedule)
-LONG_FILES = ("test_lerobot_example.py", "test_sysid_hidden.py", "test_lerobot_policy_transfer.py", "test_bad_inputs.py",
-              "test_sysid_torque.py", "test_expert.py", "test_perturbations_env.py", "test_sysid_link_mass.py",
-              "test_sysid_optimize.py", "test_rendering.py", "test_sysid_cli.py", "test_sysid_effects.py",
-              "test_tasks_env_pick_apple.py", "test_eval_batched.py", "test_tasks_envs.py", "test_tasks_env_reproducible.py")
+LONG_FILES = ("lerobot/test_example.py", "sysid/test_hidden.py", "lerobot/test_policy_transfer.py",
+              "bad_inputs/test_bad_inputs.py", "sysid/test_torque.py", "expert/test_expert.py",
+              "perturbations/test_perturbations_env.py", "sysid/test_link_mass.py", "sysid/test_optimize.py",
+              "test_rendering.py", "sysid/test_sysid_cli.py", "sysid/test_effects.py", "tasks/test_env_pick_apple.py",
+              "eval/test_batched.py", "tasks/test_envs.py", "tasks/test_env_reproducible.py")
 
 
 def _start_rank(item) -> int:
-    name = item.path.name
+    name = item.path.relative_to(TESTS).as_posix()
     return LONG_FILES.index(name) if name in LONG_FILES else len(LONG_FILES)
 
 

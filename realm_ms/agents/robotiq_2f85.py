@@ -18,7 +18,7 @@ saturated torque: F_pad ~ force_limit / (L cos(phi)) with L = 57.5 mm the parall
 i.e. ~16-18 N per N.m. Defaults: :data:`GRIPPER_FORCE_LIMIT` = 4 N.m -> 62-73 N per pad measured
 on 3-5 cm cubes (real 2F-85: 20-235 N); the driver target is rate-limited to
 :data:`GRIPPER_MAX_SPEED` -> full stroke in 0.58 s (real 2F-85: 0.57 s at 150 mm/s). See
-``docs/robot.md`` and ``tests/test_agents_gripper.py``.
+``docs/robot.md`` and ``tests/agents/test_gripper.py``.
 """
 
 from __future__ import annotations

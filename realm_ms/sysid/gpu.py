@@ -5,7 +5,7 @@ Build-time parameters (armature, payload) are set on each sub-scene's articulati
 ``gpu_init``; PhysX GPU articulations cannot change them afterwards, so a rollout whose build-time
 values differ from the current scene's rebuilds the GPU system (seconds; the population of a
 generation shares one rebuild). Same URDF, joint contract and driver as the CPU simulator
-(``simulator.py``); ``tests/test_sysid_gpu.py`` checks both agree where CUDA exists.
+(``simulator.py``); ``tests/sysid/test_gpu.py`` checks both agree where CUDA exists.
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ amplifies the noise by 1/dt² (0.1 mrad at 1 kHz -> 100 rad/s²). The workbench 
    with one kernel keeps them consistent: h * tau = M (h * a) + b + O(variation of M within the
    window). Smoothing only q̈ (and not tau) leaves the law's fast torque changes in the residual:
    0.3-1.5 N·m on noise-free 15 Hz-step data against 0.01-0.05 N·m this way
-   (``tests/test_sysid_torque.py``).
+   (``tests/sysid/test_torque.py``).
 
 The noise floor this leaves (``noise_floor``): white torque-sensor noise sigma_tau through h, and
 velocity noise sigma_v through the differenced kernel, mapped by the mass matrix:

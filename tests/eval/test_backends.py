@@ -10,7 +10,7 @@ from realm_ms.eval.backends.base import Backend, Failed, Unsupported
 from realm_ms.eval.protocol import EpisodeKey
 from realm_ms.eval.runner import RunConfig, error_record, run_plan, unsupported_record
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_the_protocol_is_declared_and_every_backend_implements_it():

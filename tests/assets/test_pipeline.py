@@ -20,7 +20,7 @@ from asset_pipeline.sources.source import SourceItem
 from asset_pipeline.stages.decompose import CoacdSettings, decompose
 from asset_pipeline.stages.normalize import guess_units
 
-_spec = importlib.util.spec_from_file_location("asset_meshes", Path(__file__).parent / "fixtures" / "assets" / "meshes.py")
+_spec = importlib.util.spec_from_file_location("asset_meshes", Path(__file__).parent / "fixtures" / "meshes.py")
 meshes = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(meshes)
 

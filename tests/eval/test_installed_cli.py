@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REALM = Path(sys.executable).parent / "realm"
 needs_script = pytest.mark.skipif(not REALM.exists(), reason="console script not installed (pip install -e .)")
 

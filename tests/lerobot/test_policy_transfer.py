@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TASK, SEED, W, H = "REALM-PushSwitch-v1", 3, 32, 24
 BIN = Path(sys.executable).parent
 

@@ -147,7 +147,7 @@ def test_real_mesh_objects_dropped_on_table_come_to_rest(tmp_path):
     from asset_pipeline.stages.decompose import CoacdSettings
     from realm_ms.assets.catalog import BuiltCatalog
 
-    spec_ = importlib.util.spec_from_file_location("asset_meshes", Path(__file__).parent / "fixtures" / "assets" / "meshes.py")
+    spec_ = importlib.util.spec_from_file_location("asset_meshes", Path(__file__).parent / "fixtures" / "meshes.py")
     meshes = importlib.util.module_from_spec(spec_)
     spec_.loader.exec_module(meshes)
     user = tmp_path / "user"

@@ -18,7 +18,7 @@ from lerobot.datasets.video_utils import FrameTimestampError, decode_video_frame
 
 from realm_ms.lerobot import frame_cache  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CAMS = ("observation.images.a", "observation.images.b")
 
 
