@@ -183,8 +183,11 @@ def _check_params(expected: dict):
 
 def _verdict_zero_floor(root):
     from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judge_verdict
+    from realm_ms.sysid.torque.space import TorqueSpace
 
-    return judge_verdict(0.4, 0.0, [Suspect("coulomb_friction", 0.5, 0.2, 0.2, {}, "")], DiagnoseConfig(), unit="N·m")
+    # torque space's judging floor: its noise (0 here: noise-free data) and its own replay floor
+    return judge_verdict(0.4, 0.0, [Suspect("coulomb_friction", 0.5, 0.2, 0.2, {}, "")], DiagnoseConfig(), unit="N·m",
+                         replay_floor=TorqueSpace.replay_floor(DiagnoseConfig()))
 
 
 def _check_no_ratio(result) -> None:
