@@ -385,13 +385,17 @@ def _run_plan(cfg: ExportConfig, writer: _Writer, p: Plan, summary: dict) -> Non
                             obs=req, quality=False, shader=cfg.shader, hook=FrameHook(cfg.gripper_labels, p.replay),
                             env_kwargs={"robot_model": cfg.robot_model} if cfg.robot_model else {})
 
+        def full(key: EpisodeKey) -> bool:
+            """The cell has its successful episodes (``--success-only``): the driver skips its later keys."""
+            return p.want is not None and p.want[key.cell()] == 0
+
         def on_record(rec: dict) -> None:
             hooked, key = rec.pop(HOOKED, None), key_of(rec)
             if rec.get("status") != "ok":  # not in the sidecar: a rerun tries an error's episode again
                 summary["errors"] += rec.get("status") == "error"
                 tqdm.write(f"{key.task} {key.perturbation} seed {key.seed}: {rec.get('status')}: {rec.get('error', '')}")
                 return
-            if p.want is not None and p.want[key.cell()] == 0:  # ran beside the episode that completed its cell
+            if full(key):  # ran beside the episode that completed its cell
                 return
             keep = rec["success"] or not cfg.success_only
             for frame in hooked["frames"]:
@@ -411,9 +415,6 @@ def _run_plan(cfg: ExportConfig, writer: _Writer, p: Plan, summary: dict) -> Non
             summary["episodes"].append(asdict(er))
             tqdm.write(f"{key.task} {key.perturbation} seed {key.seed}: progression {er.progression:.2f} "
                        f"success {er.success} ({er.steps} steps){'' if keep else ' dropped'}")
-
-        def full(key: EpisodeKey) -> bool:
-            return p.want is not None and p.want[key.cell()] == 0
 
         backend = choose_backend("cpu", run_cfg, min(cfg.workers, len(p.keys)))
         try:
