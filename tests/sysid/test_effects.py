@@ -8,7 +8,8 @@ from realm_ms.agents.effects import CONFOUNDS, EFFECTS, make_effect
 from realm_ms.sysid.effect_spec import parse_effects
 
 NAMES = ["coulomb_friction", "viscous_damping", "stribeck_friction", "smooth_friction", "lugre_friction", "armature",
-         "payload", "gravity_comp_error", "latency", "target_filter", "gain_mismatch", "torque_limit", "backlash", "encoder_bias", "link_mass"]
+         "payload", "gravity_comp_error", "latency", "target_filter", "target_interpolation",
+         "gain_mismatch", "torque_limit", "backlash", "encoder_bias", "link_mass"]
 UNITS = {"N·m", "N·m·s/rad", "kg·m²", "kg", "m", "s", "rad", "rad/s", "N·m/s", "N·m/rad", "1"}
 
 

@@ -31,6 +31,7 @@ HIDDEN = {
     "gravity_comp_error": "gravity_comp_error:scale=0.1",
     "latency": "latency:delay=0.02",
     "target_filter": "target_filter:tau=0.05",
+    "target_interpolation": "target_interpolation:duration=0.1",
     "gain_mismatch": "gain_mismatch:stiffness_error=0.2,damping_error=0.2",
     "torque_limit": "torque_limit:rate_limit=1000,effort_scale=1.0",  # libfranka's limit
     # backlash is only observable where the gravity load changes sign (joints 2, 4, 6 in the
@@ -87,7 +88,8 @@ def check_fit(info, train, held, d, ev, names: list[str], strong: bool = True):
 
 
 # ---------------------------------------------------------------------------- fast (make test)
-@pytest.mark.parametrize("name, rate", [("latency", 15.0), ("coulomb_friction", 100.0), ("target_filter", 15.0)])
+@pytest.mark.parametrize("name, rate", [("latency", 15.0), ("coulomb_friction", 100.0), ("target_filter", 15.0),
+                                        ("target_interpolation", 15.0)])
 def test_hidden_effect_fast(tmp_path, ev, name, rate):
     logs = []
     info, train, held, d = run_case(tmp_path, ev, HIDDEN[name], seed=0, rate=rate, small=True, log=logs.append)
