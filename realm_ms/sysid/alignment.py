@@ -267,15 +267,17 @@ def _replay_batch(episodes: list[DroidEpisode], model, rows: np.ndarray, sim) ->
     return [out[i, : e.steps * sub : sub] for i, e in enumerate(episodes)]
 
 
-def align_grid(episodes: list[DroidEpisode], model, grid: dict[str, list[float]]) -> list[tuple[dict[str, float], LabAlignment]]:
+def align_grid(episodes: list[DroidEpisode], model, grid: dict[str, list[float]]) -> list[tuple[dict[str, float], AlignmentResult]]:
     """Every combination of the ``grid`` values (``{"target_filter.tau": [0.06, 0.08], ...}``, keys
     ``effect.param``, per-joint names set all joints) on top of ``model``, each replayed on every
-    episode in one batch (a row per episode and candidate): ``[(values, overall row), ...]``."""
+    episode in one batch (a row per episode and candidate): ``[(values, its AlignmentResult), ...]``."""
     import itertools
+    import time
 
     from realm_ms.agents.effects import make_effect
     from realm_ms.agents.robot_model import load_robot_model
 
+    t0 = time.perf_counter()
     base = load_robot_model(model).copy()
     keys = list(grid)
     combos = [dict(zip(keys, c)) for c in itertools.product(*(grid[k] for k in keys))]
@@ -294,10 +296,22 @@ def align_grid(episodes: list[DroidEpisode], model, grid: dict[str, list[float]]
     from realm_ms.agents.droid_action_spaces import DroidIK
 
     ik = DroidIK()
+    seconds = time.perf_counter() - t0
+    return [(c, tabulate([compare_episode(e, s, ik) for e, s in zip(episodes, sims[i * rows_per:(i + 1) * rows_per])],
+                         ", ".join(f"{k}={v:g}" for k, v in c.items()), seconds))
+            for i, c in enumerate(combos)]
+
+
+def leave_one_lab_out(found: list[tuple[dict[str, float], AlignmentResult]]) -> list[tuple[str, dict[str, float], float]]:
+    """What a lab outside the data should expect from choosing on the others: for each lab of a grid's
+    results (``align_grid``), the candidate with the smallest median flange error over the *other*
+    labs' episodes, and this lab's median under it: ``[(lab, values, flange_mm), ...]``."""
+    labs = sorted({e.lab for e in found[0][1].episodes})
     out = []
-    for i, c in enumerate(combos):
-        rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims[i * rows_per:(i + 1) * rows_per])]
-        out.append((c, summarize("all", rows)))
+    for lab in labs:
+        med = lambda r, keep: float(np.median([e.flange_mm for e in r.episodes if keep(e.lab)]))  # noqa: E731
+        values, res = min(found, key=lambda cr: med(cr[1], lambda x: x != lab))
+        out.append((lab, values, med(res, lambda x: x == lab)))
     return out
 
 
@@ -311,9 +325,14 @@ def align(episodes: list[DroidEpisode], model=None, model_name: str | None = Non
     sims = replay_closed_loop(episodes, model)
     ik = DroidIK()
     rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims)]
-    labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
     name = model_name or (str(model) if model is not None and not isinstance(model, dict) else "nominal")
-    return AlignmentResult(name, rows, labs, summarize("all", rows), time.perf_counter() - t0)
+    return tabulate(rows, name, time.perf_counter() - t0)
+
+
+def tabulate(rows: list[EpisodeAlignment], model_name: str, seconds: float) -> AlignmentResult:
+    """Per-episode rows, per-lab medians and the overall medians of one model."""
+    labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
+    return AlignmentResult(model_name, rows, labs, summarize("all", rows), seconds)
 
 
 # ---------------------------------------------------------------------------- the workbench's npz
