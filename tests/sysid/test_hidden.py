@@ -109,7 +109,7 @@ def test_hidden_command_interpolation_is_told_from_its_look_alikes(tmp_path, ev)
     from realm_ms.sysid.diagnose import DiagnoseConfig
 
     hidden = HIDDEN["target_interpolation"]
-    info = synth(hidden, tmp_path, SynthConfig(seed=0, noise_rad=NOISE, n_train=2, n_heldout=1, duration_s=4.0), evaluator=ev)
+    info = synth(hidden, tmp_path, SynthConfig(seed=0, noise_rad=NOISE, n_train=2, n_heldout=1, duration_s=3.0), evaluator=ev)
     train, held = load_split(tmp_path)
     cfg = DiagnoseConfig(candidates=("latency", "target_filter", "target_interpolation"))
     d = diagnose(train, held, config=cfg, evaluator=ev, log=lambda *a: None)
