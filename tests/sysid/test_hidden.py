@@ -31,7 +31,6 @@ HIDDEN = {
     "gravity_comp_error": "gravity_comp_error:scale=0.1",
     "latency": "latency:delay=0.02",
     "target_filter": "target_filter:tau=0.05",
-    "target_interpolation": "target_interpolation:duration=0.1",
     "gain_mismatch": "gain_mismatch:stiffness_error=0.2,damping_error=0.2",
     "torque_limit": "torque_limit:rate_limit=1000,effort_scale=1.0",  # libfranka's limit
     # backlash is only observable where the gravity load changes sign (joints 2, 4, 6 in the
@@ -108,7 +107,7 @@ def test_hidden_command_interpolation_is_told_from_its_look_alikes(tmp_path, ev)
     (transport delay, first-order filter): named first, fitted to within 20 % and to the floor."""
     from realm_ms.sysid.diagnose import DiagnoseConfig
 
-    hidden = HIDDEN["target_interpolation"]
+    hidden = "target_interpolation:duration=0.1"
     info = synth(hidden, tmp_path, SynthConfig(seed=0, noise_rad=NOISE, n_train=2, n_heldout=1, duration_s=3.0), evaluator=ev)
     train, held = load_split(tmp_path)
     cfg = DiagnoseConfig(candidates=("latency", "target_filter", "target_interpolation"))

@@ -26,6 +26,9 @@ class TargetInterpolation(Effect):
     signature = ("residual ≈ -(T/2)·q̇ on all joints with one shared ramp time T, and the 15 Hz target steps "
                  "smoothed into ramps: an interpolator between the command and the controller")
     order = 21  # after the transport delay: the interpolator ramps what arrives
+    # a look-alike of target_filter and latency (CONFOUNDS): position-space diagnosis screens it on
+    # request (--candidates), and auto fits it when either of those leads
+    screened = False
     Config = TargetInterpolationConfig
 
     @classmethod
