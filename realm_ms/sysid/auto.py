@@ -35,6 +35,9 @@ class AutoConfig:
     max_steps: int = 4  # kept effects at most
     max_fits: int = 6  # fits at most (kept + rejected)
     generations: int = 10  # CMA-ES generations per fit (the linearised start does most of the work)
+    # CMA-ES stops once its best train loss improved by < 0.2 % over this many generations (``fit``
+    # waits 6): auto runs up to ``max_fits`` fits, and each generation replays the search data once
+    patience: int = 3
     popsize: int | None = None
     min_gain: float = 0.05  # relative held-out RMSE fall a step must bring
     min_floor_drop: float = 0.1  # ... and absolute, in units of the judging floor
@@ -45,8 +48,8 @@ class AutoConfig:
     # LuGre fitted and rejected at 26x)
     unscreened_within: float = 3.0
     # seconds of train data the screening and the fits replay (whole trajectories, ``Space.searching``;
-    # None: all): every probe and CMA-ES candidate replays all of it, while the held-out error that
-    # ranks suspects, keeps steps and judges the verdict is always on the whole held-out split
+    # None or 0: all): every probe and CMA-ES candidate replays all of it, while the held-out error
+    # that ranks suspects, keeps steps and judges the verdict is always on the whole held-out split
     search_s: float | None = 45.0
     seed: int = 0
     diagnose: DiagnoseConfig = field(default_factory=DiagnoseConfig)

@@ -79,7 +79,7 @@ class PositionSpace:
 
     def searching(self, budget_s: float | None) -> "PositionSpace":
         """The space ``auto`` screens and fits on: the train trajectories, in order, that fit in
-        ``budget_s`` seconds (at least one; None: all), the held-out split whole. A replay's cost
+        ``budget_s`` seconds (at least one; None or 0: all), the held-out split whole. A replay's cost
         grows with the data it simulates, and every screening probe and CMA-ES candidate replays
         all of it; the held-out error that ranks and keeps each step stays on all held-out data."""
         return PositionSpace(within_budget(self.train, budget_s), self.heldout, self.evaluator, self.progress)
@@ -106,7 +106,7 @@ class PositionSpace:
 
         # the loop reports values and held-out errors, not intervals: no uncertainty batch
         cfg = FitConfig(add=_start_spec(suspect.effect, suspect.params), generations=config.generations,
-                        popsize=config.popsize, seed=config.seed, uncertainty=False)
+                        popsize=config.popsize, seed=config.seed, uncertainty=False, patience=config.patience)
         return fit(self.train, self.heldout, model, cfg, self.evaluator, progress=False, log=log)
 
     def details(self, diagnosis: Diagnosis, model: RobotModel) -> tuple[dict, str]:
@@ -122,8 +122,9 @@ class PositionSpace:
 
 
 def within_budget(trajs: list[Trajectory], budget_s: float | None) -> list[Trajectory]:
-    """The trajectories, in order, whose durations fit in ``budget_s`` (first fit; at least the first)."""
-    if budget_s is None:
+    """The trajectories, in order, whose durations fit in ``budget_s`` (first fit; at least the
+    first); all of them for a budget of None or 0."""
+    if not budget_s:
         return list(trajs)
     out, used = [], 0.0
     for tr in trajs:
