@@ -24,9 +24,10 @@ held-out residual / noise floor, to ``--out`` (JSON) and ``.md``.
 
 ``--droid-auto``: `auto` on DROID-format episodes (``synth_droid``: Cartesian commands, the joint
 target rebuilt from the measured state, as on real DROID logs) of a robot with a hidden command delay
-and softer gains, twice in one run: with the defaults, and as before the search budget and the
-look-alike rule (``--search-s 0``: all train data; every unscreened look-alike fitted); prints both
-wall and CPU times and their ratio, each run's verdict and its final error against the floor.
+and softer gains, twice in one run: with the defaults, and as before the search budget, the
+look-alike rule and auto's CMA-ES patience (all train data, every unscreened look-alike fitted,
+patience 6; the engine's per-chunk trimming applies to both); prints both wall and CPU times and
+their ratio, each run's verdict and its final error against the floor.
 
 ``--engine mujoco`` makes the data with the independent MuJoCo reference (same URDF and law, 1 kHz
 controller on a converged plant) instead of the replay simulator itself: sysid on data it did not make.
@@ -92,36 +93,41 @@ DROID_HIDDEN = "latency:delay=0.06,gain_mismatch:stiffness_error=-0.3,damping_er
 
 def run_droid_auto(args) -> int:
     """``auto`` on synthetic DROID-format episodes, as it runs now and as it ran before the search
-    budget and the look-alike rule, in one run (same data, same machine load)."""
+    budget, the look-alike rule and the shorter CMA-ES patience, in one run (same data, same machine
+    load). Each run is its own process, so its CPU time includes its worker processes'."""
     import resource
+    import subprocess
 
     from realm_ms.sysid import api
-    from realm_ms.sysid.synth import SynthConfig
 
     hidden = args.hidden if args.hidden != "coulomb_friction:fc=0.3" else DROID_HIDDEN
     n_train, n_held, secs = (float(x) for x in args.size.split(","))
+    modes = {"now": {}, "before": {"search_s": None, "unscreened_within": float("inf"), "patience": 6}}
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         api.synth_droid(hidden, tmp, seed=args.seed, noise_rad=args.noise, engine=args.engine, n_train=int(n_train),
                         n_heldout=int(n_held), duration_s=secs)
-        data = Path(tmp) / "npz" / "train"
-        held = Path(tmp) / "npz" / "heldout"
-        modes = {"now": {}, "before": {"search_s": None, "unscreened_within": float("inf")}}
         for mode, config in modes.items():
-            cpu0 = _cpu_s(resource)
+            code = ("import json, sys; from realm_ms.sysid import api\n"
+                    f"a = api.auto({str(Path(tmp) / 'npz')!r}, workers={args.workers}, device='cpu', progress=False, "
+                    f"log=lambda m: print('  ' + m, file=sys.stderr), **{config!r}).to_json()\n"
+                    "print(json.dumps(a, default=float))")
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.perf_counter()
-            a = api.auto(str(data), heldout=str(held), workers=args.workers, device="cpu", progress=False,
-                         log=lambda m: print("  " + m, file=sys.stderr), **config).to_json()
-            wall, cpu = time.perf_counter() - t0, _cpu_s(resource) - cpu0
+            out = subprocess.run([sys.executable, "-c", code], check=True, stdout=subprocess.PIPE, text=True).stdout
+            wall = time.perf_counter() - t0
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+            a = json.loads(out.strip().splitlines()[-1])
             f = a["final"]
-            r = {"mode": mode, "wall_s": wall, "cpu_s": cpu, "load": os.getloadavg()[0], "verdict": f["verdict"],
-                 "nominal_rad": a["nominal_heldout_rmse"], "final_rad": f["heldout_rmse"],
+            r = {"mode": mode, "config": config, "wall_s": wall, "cpu_s": cpu, "load": os.getloadavg()[0],
+                 "verdict": f["verdict"], "nominal_rad": a["nominal_heldout_rmse"], "final_rad": f["heldout_rmse"],
                  "floor_rad": a["details"]["judging_floor"], "steps": [(s["effect"], s["heldout_rmse"]) for s in a["steps"]],
                  "searched_train": a["details"]["searched_train"]}
             rows.append(r)
             chain = " -> ".join([f"{r['nominal_rad']:.3g}"] + [f"+{e} {v:.3g}" for e, v in r["steps"]])
             print(f"{mode:>6}: {wall:6.0f} s wall, {cpu:6.0f} s CPU (load {r['load']:.1f}): {chain} rad; "
-                  f"{r['verdict']} at {r['final_rad'] / r['floor_rad']:.1f}x the floor {r['floor_rad']:.2e} rad")
+                  f"{r['verdict']} at {r['final_rad'] / r['floor_rad']:.1f}x the floor {r['floor_rad']:.2e} rad", flush=True)
     ratio = rows[1]["wall_s"] / rows[0]["wall_s"]
     print(f"hidden {hidden}, {args.size} (train, held-out, s), {args.engine}, {args.workers} worker(s): "
           f"before / now = {ratio:.2f}x wall, {rows[1]['cpu_s'] / rows[0]['cpu_s']:.2f}x CPU")
@@ -130,12 +136,6 @@ def run_droid_auto(args) -> int:
     out.write_text(json.dumps({"hidden": hidden, "size": args.size, "engine": args.engine, "runs": rows,
                                "wall_ratio": ratio}, indent=2, default=float))
     return 0
-
-
-def _cpu_s(resource) -> float:
-    """CPU seconds of this process and its finished children (the worker pools are closed per run)."""
-    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def run_native_sweep(args) -> int:

@@ -229,3 +229,20 @@ def test_auto_message_uses_the_configured_found_factor_and_unit():
 
     msg = _message("at_floor", 1e-1, 0.5, 0.3, [], found_factor=2.0, unit="N·m")
     assert "<= 2x 3.00e-01 N·m" in msg and "1.5x" not in msg and " rad" not in msg
+
+
+def test_the_search_budget_takes_whole_train_trajectories_in_order_and_keeps_the_held_out_whole():
+    """``auto`` screens and fits on at most ``search_s`` seconds of the train split (first fit, at
+    least one trajectory; 0 or None: all); the held-out split, which every reported error is
+    measured on, is never cut."""
+    from types import SimpleNamespace
+
+    from realm_ms.sysid.space import PositionSpace, within_budget
+
+    trajs = [SimpleNamespace(name=f"t{i}", duration=d) for i, d in enumerate([11.0, 16.0, 6.0, 14.0, 12.0])]
+    assert [t.name for t in within_budget(trajs, 45.0)] == ["t0", "t1", "t2", "t4"]  # 14 s would not fit
+    assert [t.name for t in within_budget(trajs, 5.0)] == ["t0"]
+    assert within_budget(trajs, 0) == trajs and within_budget(trajs, None) == trajs
+    held = [SimpleNamespace(name="h", duration=60.0)]
+    sub = PositionSpace(trajs, held, evaluator=None).searching(20.0)
+    assert [t.name for t in sub.train] == ["t0", "t2"] and sub.heldout is held
