@@ -44,8 +44,8 @@ class AutoConfig:
     # an unscreened look-alike (LuGre: its bristle costs as much per replay as all screened laws
     # together) is fitted only when a screened contender's fit ends within this factor of the
     # judging floor: far above it a look-alike is not what stands between the model and the floor,
-    # and its fit would be most of the run (real DROID episodes: smooth friction at 18x the floor,
-    # LuGre fitted and rejected at 26x)
+    # and its fit would be most of the run (2 real DROID episodes: smooth friction at 16x the floor,
+    # then LuGre fitted and rejected at 28x, 31 % of the run's CPU)
     unscreened_within: float = 3.0
     # seconds of train data the screening and the fits replay (whole trajectories, ``Space.searching``;
     # None or 0: all): every probe and CMA-ES candidate replays all of it, while the held-out error
