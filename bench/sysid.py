@@ -7,6 +7,7 @@ the GPU-parallel population (speed-up recorded).
     python bench/sysid.py --sweep [--engine mujoco] [--jobs N] [--noise 1e-4] [--out sweep.json]
     python bench/sysid.py --auto [--hidden ...] [--engine mujoco]   # `realm sysid auto` wall time (goal < 5 min)
     python bench/sysid.py --torque [--hidden frictionloss]             # `auto` on 10 x 10 s MuJoCo-native torque logs
+    python bench/sysid.py --droid-auto [--hidden SPEC] [--size 7,3,10] [--engine physx|mujoco]
 
     python bench/sysid.py --native-sweep [--space torque|position] [--size 3,2,6] [--seeds 0,1,2] [--effects ...]
     python bench/sysid.py --friction-laws [--size 3,2,6] [--seeds 0,1,2]  # which friction law fits which
@@ -20,6 +21,13 @@ held-out residual / noise floor, to ``--out`` (JSON) and ``.md``.
 
 ``--auto`` times ``realm sysid auto`` (diagnose -> fit -> re-diagnose ...) on the same 10 x 10 s data;
 ``--torque`` does so in torque space on 1 kHz torque logs from ``synth --engine mujoco-native``.
+
+``--droid-auto``: `auto` on DROID-format episodes (``synth_droid``: Cartesian commands, the joint
+target rebuilt from the measured state, as on real DROID logs) of a robot with a hidden command delay
+and softer gains, twice in one run: with the defaults, and as before the search budget, the
+look-alike rule and auto's CMA-ES patience (all train data, every unscreened look-alike fitted,
+patience 6; the engine's per-chunk trimming applies to both); prints both wall and CPU times and
+their ratio, each run's verdict and its final error against the floor.
 
 ``--engine mujoco`` makes the data with the independent MuJoCo reference (same URDF and law, 1 kHz
 controller on a converged plant) instead of the replay simulator itself: sysid on data it did not make.
@@ -77,6 +85,58 @@ def run_auto(args, data: Path, space: str) -> dict:
           f"{a['final']['noise_floor']:.3g}); {wall:.0f} s wall, {args.workers} worker(s), load {r['load'][0]:.1f}; goal < 300 s: "
           f"{'met' if wall < 300 else 'NOT met'}")
     return r
+
+
+#: the DROID-format bench's hidden robot: a command pipeline delay and softer gains (issue #45)
+DROID_HIDDEN = "latency:delay=0.06,gain_mismatch:stiffness_error=-0.3,damping_error=0.2"
+
+
+def run_droid_auto(args) -> int:
+    """``auto`` on synthetic DROID-format episodes, as it runs now and as it ran before the search
+    budget, the look-alike rule and the shorter CMA-ES patience, in one run (same data, same machine
+    load). Each run is its own process, so its CPU time includes its worker processes'."""
+    import resource
+    import subprocess
+
+    from realm_ms.sysid import api
+
+    hidden = args.hidden if args.hidden != "coulomb_friction:fc=0.3" else DROID_HIDDEN
+    n_train, n_held, secs = (float(x) for x in args.size.split(","))
+    # (1e9: every unscreened look-alike is fitted; the config is written into the run's code as a repr)
+    modes = {"now": {}, "before": {"search_s": None, "unscreened_within": 1e9, "patience": 6}}
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        api.synth_droid(hidden, tmp, seed=args.seed, noise_rad=args.noise, engine=args.engine, n_train=int(n_train),
+                        n_heldout=int(n_held), duration_s=secs)
+        for mode, config in modes.items():
+            code = ("import json, sys; from realm_ms.sysid import api\n"
+                    f"a = api.auto({str(Path(tmp) / 'npz')!r}, workers={args.workers}, device='cpu', progress=False, "
+                    f"log=lambda m: print('  ' + m, file=sys.stderr), **{config!r}).to_json()\n"
+                    "print(json.dumps(a, default=float))")
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            t0 = time.perf_counter()
+            out = subprocess.run([sys.executable, "-c", code], check=True, stdout=subprocess.PIPE, text=True).stdout
+            wall = time.perf_counter() - t0
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+            a = json.loads(out.strip().splitlines()[-1])
+            f = a["final"]
+            r = {"mode": mode, "config": config, "wall_s": wall, "cpu_s": cpu, "load": os.getloadavg()[0],
+                 "verdict": f["verdict"], "nominal_rad": a["nominal_heldout_rmse"], "final_rad": f["heldout_rmse"],
+                 "floor_rad": a["details"]["judging_floor"], "steps": [(s["effect"], s["heldout_rmse"]) for s in a["steps"]],
+                 "searched_train": a["details"]["searched_train"]}
+            rows.append(r)
+            chain = " -> ".join([f"{r['nominal_rad']:.3g}"] + [f"+{e} {v:.3g}" for e, v in r["steps"]])
+            print(f"{mode:>6}: {wall:6.0f} s wall, {cpu:6.0f} s CPU (load {r['load']:.1f}): {chain} rad; "
+                  f"{r['verdict']} at {r['final_rad'] / r['floor_rad']:.1f}x the floor {r['floor_rad']:.2e} rad", flush=True)
+    ratio = rows[1]["wall_s"] / rows[0]["wall_s"]
+    print(f"hidden {hidden}, {args.size} (train, held-out, s), {args.engine}, {args.workers} worker(s): "
+          f"before / now = {ratio:.2f}x wall, {rows[1]['cpu_s'] / rows[0]['cpu_s']:.2f}x CPU")
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps({"hidden": hidden, "size": args.size, "engine": args.engine, "runs": rows,
+                               "wall_ratio": ratio}, indent=2, default=float))
+    return 0
 
 
 def run_native_sweep(args) -> int:
@@ -236,6 +296,8 @@ def main() -> int:
     ap.add_argument("--space", choices=["torque", "position"], default="torque",
                     help="--native-sweep: torque logs, or position logs with the 15 Hz command")
     ap.add_argument("--size", default="7,3,10", help="--native-sweep, --friction-laws: train,heldout,seconds per trajectory")
+    ap.add_argument("--droid-auto", action="store_true",
+                    help="`auto` on DROID-format episodes with a hidden delay and softer gains, now and as before")
     ap.add_argument("--friction-laws", action="store_true",
                     help="torque-space fits of friction combinations on frictionloss / Gaz / LuGre plants")
     args = ap.parse_args()
@@ -249,6 +311,8 @@ def main() -> int:
     output_arg(ap, args.out, example="bench_sysid.json")  # before hours of fitting, not when writing
     if args.friction_laws:
         return run_friction_laws(args)
+    if args.droid_auto:
+        return run_droid_auto(args)
     if args.sweep:
         return run_sweep(args)
     if args.native_sweep:

@@ -215,6 +215,8 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
     for key in ("generations", "max_steps"):
         if key in config:
             check_int(config[key], f"{key} (--{key.replace('_', '-')})", minimum=1)
+    if config.get("search_s") is not None:
+        check_non_negative(config["search_s"], "search_s (--search-s)", "s")
     if out is not None:
         check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)

@@ -35,9 +35,22 @@ class AutoConfig:
     max_steps: int = 4  # kept effects at most
     max_fits: int = 6  # fits at most (kept + rejected)
     generations: int = 10  # CMA-ES generations per fit (the linearised start does most of the work)
+    # CMA-ES stops once its best train loss improved by < 0.2 % over this many generations (``fit``
+    # waits 6): auto runs up to ``max_fits`` fits, and each generation replays the search data once
+    patience: int = 3
     popsize: int | None = None
     min_gain: float = 0.05  # relative held-out RMSE fall a step must bring
     min_floor_drop: float = 0.1  # ... and absolute, in units of the judging floor
+    # an unscreened look-alike (LuGre: its bristle costs as much per replay as all screened laws
+    # together) is fitted only when a screened contender's fit ends within this factor of the
+    # judging floor: far above it a look-alike is not what stands between the model and the floor,
+    # and its fit would be most of the run (2 real DROID episodes: smooth friction at 16x the floor,
+    # then LuGre fitted and rejected at 28x, 31 % of the run's CPU)
+    unscreened_within: float = 3.0
+    # seconds of train data the screening and the fits replay (whole trajectories, ``Space.searching``;
+    # None or 0: all): every probe and CMA-ES candidate replays all of it, while the held-out error
+    # that ranks suspects, keeps steps and judges the verdict is always on the whole held-out split
+    search_s: float | None = 45.0
     seed: int = 0
     diagnose: DiagnoseConfig = field(default_factory=DiagnoseConfig)
 
@@ -145,6 +158,11 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
     model = (model or RobotModel()).copy()
     quiet = lambda *a: None  # noqa: E731
     bar = _bar(progress, cfg.max_fits)
+    full, space = space, space.searching(cfg.search_s)
+    if space is not full and len(space.train) < len(full.train):
+        log(f"auto: screening and fitting on {len(space.train)} of {len(full.train)} train trajectories "
+            f"({sum(t.duration for t in space.train):.0f} of {sum(t.duration for t in full.train):.0f} s, "
+            f"search budget {cfg.search_s:g} s); every held-out error is on all {len(space.heldout)} held-out trajectories")
     d = space.diagnose(model, dcfg, log=quiet)
     nominal = float(d.baseline_heldout_rmse)
     noise = float(d.noise_floor)
@@ -165,6 +183,11 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
             break
         fitted = []
         for sus in contenders(cands, screened, tried, space.library())[: cfg.max_fits - fits]:
+            if sus.effect not in screened and fitted and min(a for a, _, _ in fitted) > cfg.unscreened_within * floor:
+                log(f"auto: not fitting {sus.effect} (a look-alike diagnose does not screen): the best screened "
+                    f"contender ends at {min(a for a, _, _ in fitted) / floor:.1f}x the floor, above "
+                    f"{cfg.unscreened_within:g}x")
+                continue
             tried.add(sus.effect)
             fits += 1
             bar.set_description(f"auto: fitting {sus.effect}")
@@ -203,6 +226,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
     else:
         verdict = "unexplained"
     details, note = space.details(d, model)
+    details["searched_train"] = [t.name for t in space.train]
     msg = _message(verdict, nominal, current, floor, kept, model.params_at_bounds(),
                    unscreened(screened, tried | set(model.names), space.library()), dcfg.found_factor, unit)
     if note and verdict != "at_floor":

@@ -246,7 +246,7 @@ def _auto(args) -> int:
     a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
                  progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
                  generations=args.generations, max_steps=args.max_steps, space=args.space,
-                 command=args.command).to_json()
+                 command=args.command, search_s=args.search_s).to_json()
     f = a["final"]
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")
@@ -444,6 +444,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     s.add_argument("--generations", type=integer(1), default=10,
                    help="CMA-ES generations per fit, integer >= 1 (default 10)")
     s.add_argument("--max-steps", type=integer(1), default=4, help="effects to add at most, integer >= 1 (default 4)")
+    s.add_argument("--search-s", type=non_negative("s"), default=45.0, metavar="S",
+                   help="seconds of train data the screening and fits replay: whole trajectories in order, at least "
+                        "one (position space; every held-out error is on all held-out data); 0 = all (default 45)")
     s.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     s.add_argument("--json", metavar="FILE", help="write the steps, final verdict and friction curve as JSON to FILE")
     _space_arg(s)

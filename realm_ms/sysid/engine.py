@@ -132,7 +132,8 @@ def make_simulator(config: SimConfig | None = None, device: str | None = None):
 ARM_STEP_COST = 0.15
 
 
-def plan_chunks(on: np.ndarray, step_cost: np.ndarray, n_chunks: int, max_envs: int) -> list[np.ndarray]:
+def plan_chunks(on: np.ndarray, step_cost: np.ndarray, n_chunks: int, max_envs: int,
+                lengths: np.ndarray | None = None) -> list[np.ndarray]:
     """Arm indices of each chunk of a batch, at most ``max_envs`` arms per chunk.
 
     ``on`` (E, F) says which of the batch's F effects is on at each arm; ``step_cost`` (F, 2) what
@@ -141,10 +142,18 @@ def plan_chunks(on: np.ndarray, step_cost: np.ndarray, n_chunks: int, max_envs: 
     whose dearest chunk costs least is kept: ``n_chunks`` contiguous equal chunks (all a batch whose
     arms run the same effects can have: a fit's population, a baseline), or arms with the same
     effects kept together and those groups spread over the chunks dearest first, each to the chunk
-    it leaves cheapest, so that a screening batch's costly friction laws land on different workers."""
+    it leaves cheapest, so that a screening batch's costly friction laws land on different workers.
+    ``lengths``: the arms' physics steps, longest first; the contiguous chunks then hold equal
+    shares of the arm-steps rather than of the arms (a chunk runs as long as its longest arm)."""
     e_count = on.shape[0]
     step_cost = np.asarray(step_cost, float).reshape(-1, 2)
     bounds = np.linspace(0, e_count, n_chunks + 1).astype(int)
+    if lengths is not None and n_chunks > 1:
+        # arms longest first: cut where each chunk holds an equal share of the arm-steps
+        cum = np.cumsum(lengths)
+        by_steps = np.r_[0, np.searchsorted(cum, cum[-1] * np.arange(1, n_chunks) / n_chunks) + 1, e_count]
+        if (np.diff(by_steps) <= max_envs).all():
+            bounds = np.maximum.accumulate(np.minimum(by_steps, e_count))
     contiguous = [np.arange(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
     sig = np.unique(on, axis=0, return_inverse=True)[1].reshape(-1)
     if n_chunks == 1 or sig.max(initial=0) == 0:
@@ -230,10 +239,12 @@ class Evaluator:
         self.close()
 
     # ------------------------------------------------------------------ core
-    def rollout(self, q0, qd0, cmd, effects: list[Effect], closed=None) -> np.ndarray:
+    def rollout(self, q0, qd0, cmd, effects: list[Effect], closed=None, lengths=None) -> np.ndarray:
         """Batched rollout (E arms) -> (E, S + 1, 7); effects' theta has E rows or 1. Each distinct
         arm (``arm_keys``) is simulated once, and not at all when the cache holds it.
-        ``closed``: closed-loop DROID commands (``closed_loop.ClosedLoopCommand``), E rows."""
+        ``closed``: closed-loop DROID commands (``closed_loop.ClosedLoopCommand``), E rows.
+        ``lengths``: (E,) physics steps each arm needs (None: all S); the steps after them hold
+        the arm's last simulated state."""
         keys = arm_keys(q0, qd0, cmd, effects)
         if closed is not None:
             keys = [k + closed.key(i) for i, k in enumerate(keys)]
@@ -248,13 +259,17 @@ class Evaluator:
             first = np.array([first_of[k] for k in todo])
             sub = _effects_from_specs([_spec(fx, _theta_rows(fx, first)) for fx in effects])
             sub_closed = None if closed is None else closed.rows(first)
-            for k, row in zip(todo, self._simulate(q0[first], qd0[first], cmd[first], sub, sub_closed)):
+            sub_len = None if lengths is None else np.asarray(lengths)[first]
+            for k, row in zip(todo, self._simulate(q0[first], qd0[first], cmd[first], sub, sub_closed, sub_len)):
                 rows[k] = row
                 self.cache.put(k, row)
         return np.stack([rows[k] for k in keys])
 
-    def _simulate(self, q0, qd0, cmd, effects: list[Effect], closed=None) -> np.ndarray:
-        """The rollout itself: chunked / in worker processes as configured, or on the GPU."""
+    def _simulate(self, q0, qd0, cmd, effects: list[Effect], closed=None, lengths=None) -> np.ndarray:
+        """The rollout itself: chunked / in worker processes as configured, or on the GPU. With
+        ``lengths``, arms are chunked longest first and each chunk runs only as many steps as its
+        longest arm needs (a batch of segments runs as long as its longest one; the padding of the
+        shorter ones is most of a chunk of short ones)."""
         e_count = q0.shape[0]
         if self.device.startswith("cuda"):
             if closed is not None:
@@ -268,22 +283,28 @@ class Evaluator:
             n_chunks = max(n_chunks, self.workers)
         on = np.stack([np.broadcast_to(fx.on_rows().cpu().numpy(), (e_count,)) for fx in effects], 1) \
             if effects else np.zeros((e_count, 0), bool)
-        chunks = plan_chunks(on, np.array([fx.step_cost for fx in effects]), n_chunks, self.max_envs)
+        steps = cmd.shape[1]
+        lengths = np.full(e_count, steps) if lengths is None else np.clip(np.asarray(lengths), 1, steps)
+        order = np.argsort(-lengths, kind="stable")
+        chunks = [order[rows] for rows in plan_chunks(on[order], np.array([fx.step_cost for fx in effects]), n_chunks,
+                                                      self.max_envs, lengths[order])]
         tasks = []
         for rows in chunks:
             # an effect at its off-values on every arm of a chunk replays as if absent (the effects'
             # contract): a chunk of several leaves it out rather than pay its hooks at every step
             specs = [_spec(fx, _theta_rows(fx, rows)) for fx, o in zip(effects, on.T) if len(chunks) == 1 or o[rows].any()]
-            tasks.append((q0[rows], qd0[rows], cmd[rows], specs, None if closed is None else closed.rows(rows)))
+            n = int(lengths[rows].max())
+            tasks.append((q0[rows], qd0[rows], cmd[rows, :n], specs, None if closed is None else closed.rows(rows)))
         if self.workers > 1 and len(tasks) > 1:
             parts = list(self._pool_get().map(_worker_run, tasks))
         else:
             from realm_ms.sysid.closed_loop import bind
 
             parts = [self.sim.rollout(q, v, bind(cl, c), _effects_from_specs(s), steps=c.shape[1]) for q, v, c, s, cl in tasks]
-        out = np.empty((e_count, *parts[0].shape[1:]), parts[0].dtype)
+        out = np.empty((e_count, steps + 1, 7), parts[0].dtype)
         for rows, part in zip(chunks, parts):
-            out[rows] = part
+            out[rows, :part.shape[1]] = part
+            out[rows, part.shape[1]:] = part[:, -1:]
         return out
 
     def simulate(self, segset: SegmentSet, effects: list[Effect], n_candidates: int = 1) -> np.ndarray:
@@ -300,7 +321,7 @@ class Evaluator:
             e.set_theta(rows)
             expanded.append(e)
         closed = None if segset.closed is None else segset.closed.rows(idx)
-        hist = self.rollout(segset.q0[idx], segset.qd0[idx], segset.cmd[idx], expanded, closed)
+        hist = self.rollout(segset.q0[idx], segset.qd0[idx], segset.cmd[idx], expanded, closed, segset.lengths[idx])
         return segset.sample(hist, idx)
 
     def evaluate(self, segset: SegmentSet, effects: list[Effect], n_candidates: int = 1) -> Scores:

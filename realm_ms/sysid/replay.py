@@ -86,6 +86,12 @@ class SegmentSet:
     def steps(self) -> int:
         return self.cmd.shape[1]
 
+    @property
+    def lengths(self) -> np.ndarray:
+        """(N,) physics steps each segment needs (its last sample's), at most ``steps``: the rest of
+        a row is padding that holds the last target, simulated only to keep the batch rectangular."""
+        return np.minimum(np.ceil(self.pos.max(axis=1) - 1e-9).astype(np.int64) + 1, self.steps)
+
     @classmethod
     def build(cls, trajs: list[Trajectory], physics_hz: float = 120.0, length_s: float = 5.0,
               burn_in_s: float = 1.0, snap_s: float = 0.6, gains: str = "polymetis",

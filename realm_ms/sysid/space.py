@@ -77,6 +77,13 @@ class PositionSpace:
     def screened(self, cfg: DiagnoseConfig) -> list[str]:
         return list(cfg.candidates)
 
+    def searching(self, budget_s: float | None) -> "PositionSpace":
+        """The space ``auto`` screens and fits on: the train trajectories, in order, that fit in
+        ``budget_s`` seconds (at least one; None or 0: all), the held-out split whole. A replay's cost
+        grows with the data it simulates, and every screening probe and CMA-ES candidate replays
+        all of it; the held-out error that ranks and keeps each step stays on all held-out data."""
+        return PositionSpace(within_budget(self.train, budget_s), self.heldout, self.evaluator, self.progress)
+
     # ------------------------------------------------------------------ verbs
     def compare(self, model: RobotModel | None = None, segment_s: float = 8.0) -> CompareResult:
         return compare(self.train + self.heldout, model, segment_s=segment_s, evaluator=self.evaluator)
@@ -99,7 +106,7 @@ class PositionSpace:
 
         # the loop reports values and held-out errors, not intervals: no uncertainty batch
         cfg = FitConfig(add=_start_spec(suspect.effect, suspect.params), generations=config.generations,
-                        popsize=config.popsize, seed=config.seed, uncertainty=False)
+                        popsize=config.popsize, seed=config.seed, uncertainty=False, patience=config.patience)
         return fit(self.train, self.heldout, model, cfg, self.evaluator, progress=False, log=log)
 
     def details(self, diagnosis: Diagnosis, model: RobotModel) -> tuple[dict, str]:
@@ -112,6 +119,19 @@ class PositionSpace:
 
         return build_report(self.train, self.heldout, model or RobotModel(), out, self.evaluator, diagnosis=diagnosis,
                             fit_result=fit_result, waterfall=waterfall, data_name=data_name, log=log, auto=auto)
+
+
+def within_budget(trajs: list[Trajectory], budget_s: float | None) -> list[Trajectory]:
+    """The trajectories, in order, whose durations fit in ``budget_s`` (first fit; at least the
+    first); all of them for a budget of None or 0."""
+    if not budget_s:
+        return list(trajs)
+    out, used = [], 0.0
+    for tr in trajs:
+        if not out or used + tr.duration <= budget_s:
+            out.append(tr)
+            used += tr.duration
+    return out
 
 
 #: the spaces by ``--space`` name; ``auto`` picks the first whose needs the data meets (``suits``)

@@ -152,6 +152,7 @@ CASES: list[Case] = [
     # ------------------------------------------------------------------------ fit / diagnose / report
     cli("fit-popsize-1", "sysid fit {root}/good --add latency --out {root}/m.yaml --popsize 1", r"argument --popsize: must be >= 2"),
     cli("fit-generations-0", "sysid fit {root}/good --add latency --out {root}/m.yaml --generations 0", r"argument --generations: must be >= 1"),
+    cli("auto-search-negative", "sysid auto {root}/good --search-s -5", r"argument --search-s: .*>= 0"),
     cli("fit-out-is-directory", f"sysid fit {{root}}/good --add latency --out {{root}}/out_dir {CPU}", r"--out: .*out_dir is a directory; give a file path"),
     cli("fit-json-is-directory", f"sysid fit {{root}}/good --add latency --out {{root}}/m.yaml --json {{root}}/out_dir {CPU}", r"--json: .*out_dir is a directory"),
     cli("fit-add-unknown", f"sysid fit {{root}}/good --add magic --out {{root}}/m.yaml {CPU}", r"--add: unknown effect 'magic'"),

@@ -26,6 +26,32 @@ def test_chunking_is_transparent():
     np.testing.assert_allclose(one, chunked, atol=1e-6)
 
 
+def test_arms_that_need_fewer_steps_are_trimmed_and_nothing_they_need_changes():
+    """With ``lengths``, arms are chunked longest first and each chunk runs as long as its longest
+    arm: the steps an arm needs are those of the full rollout, the rest holds its last state."""
+    q0, cmd = _batch(n=6, steps=120)
+    fx = make_effect("coulomb_friction", {"fc": 0.3})
+    lengths = np.array([120, 40, 90, 40, 120, 60])
+    ev = Evaluator(workers=1, max_envs=2)
+    full = ev.rollout(q0, np.zeros_like(q0), cmd, [fx])
+    ev.cache, before = RolloutCache(), ev.sim.profile.arm_steps
+    trimmed = ev.rollout(q0, np.zeros_like(q0), cmd, [fx], lengths=lengths)
+    assert trimmed.shape == full.shape and np.isfinite(trimmed).all()
+    for i, n in enumerate(lengths):
+        np.testing.assert_allclose(trimmed[i, :n + 1], full[i, :n + 1], atol=1e-6)
+    # chunks of two, longest first (120, 120 | 90, 60 | 40, 40), each as long as its longest arm
+    assert ev.sim.profile.arm_steps - before == 2 * 120 + 2 * 90 + 2 * 40
+    np.testing.assert_array_equal(trimmed[5, 91:], np.repeat(trimmed[5, 90:91], 30, 0))  # held after its chunk
+
+
+def test_contiguous_chunks_share_the_arm_steps_when_lengths_are_given():
+    same = np.ones((6, 1), bool)
+    lengths = np.array([300, 100, 100, 100, 100, 100])  # longest first
+    chunks = plan_chunks(same, np.ones((1, 2)), 2, 100, lengths)
+    assert [c.tolist() for c in chunks] == [[0, 1], [2, 3, 4, 5]]
+    assert [c.tolist() for c in plan_chunks(same, np.ones((1, 2)), 2, 3, lengths)] == [[0, 1, 2], [3, 4, 5]]
+
+
 def test_plan_spreads_costly_effects_over_chunks_and_keeps_each_group_whole():
     # a screening batch in candidate order: two costly laws first, then two cheap effects, then
     # arms with no effect; contiguous halves would put both costly laws in one chunk

@@ -91,31 +91,37 @@ def test_auto_start_spec_falls_back_to_the_bare_name():
     assert _start_spec("latency", {"delay": 9.0}) == "latency"  # outside the bounds: start from off
 
 
-@pytest.mark.parametrize("coulomb_after,lugre_after", [(0.53e-3, 0.6e-3), (0.3e-3, 0.6e-3), (0.53e-3, 0.35e-3)])
-def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb_after, lugre_after):
+@pytest.mark.parametrize("coulomb_after,lugre_after,smooth_after", [(0.53e-3, 0.6e-3, 0.47e-3), (0.3e-3, 0.6e-3, 0.47e-3),
+                                                                   (0.53e-3, 0.35e-3, 0.47e-3), (1.2e-3, 0.35e-3, 0.9e-3)])
+def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb_after, lugre_after, smooth_after):
     """The screening ranks Coulomb first and cannot tell smooth friction from it: both are fitted in
     full and the one with the lower held-out error is kept; a suspect that is no look-alike waits
     for the next round. A top suspect that reaches the floor (1.5 x 0.27 mrad) ends the round. When
     none of the screened look-alikes does, LuGre friction (a look-alike the screening leaves out)
-    is fitted last."""
+    is fitted last, but only when a screened one ends within 3x the floor: far above it (smooth
+    friction at 3.3x) the costly LuGre fit is skipped, and the message says it was not screened."""
     from types import SimpleNamespace
 
     from realm_ms.agents.robot_model import RobotModel
     from realm_ms.sysid import auto as auto_mod
 
-    held_after = {"coulomb_friction": coulomb_after, "smooth_friction": 0.47e-3, "latency": 0.52e-3,
+    held_after = {"coulomb_friction": coulomb_after, "smooth_friction": smooth_after, "latency": 0.52e-3,
                   "lugre_friction": lugre_after}
     rounds = []
     fitted = []
 
     class Space:  # a position-like space whose diagnosis and fits are scripted
         unit = "rad"
+        train: list = []
 
         def replay_floor(self, cfg):
             return cfg.replay_floor_rad
 
         def screened(self, cfg):
             return list(cfg.candidates)
+
+        def searching(self, budget_s):
+            return self
 
         def library(self):
             from realm_ms.agents.effects import EFFECTS
@@ -142,6 +148,11 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb
     out = auto_mod.auto(Space(), progress=False, log=lambda *a: None).to_json()
     if coulomb_after < 0.4e-3:
         assert fitted == ["coulomb_friction"] and [s["effect"] for s in out["steps"]] == ["coulomb_friction"]
+        return
+    if smooth_after > 3 * 0.27e-3:
+        assert fitted == ["coulomb_friction", "smooth_friction"]
+        assert [s["effect"] for s in out["steps"]] == ["smooth_friction"]
+        assert "not screened here: lugre_friction, link_mass (" in out["details"]["message"]
         return
     assert fitted == ["coulomb_friction", "smooth_friction", "lugre_friction"]
     if lugre_after < 0.4e-3:
@@ -220,3 +231,20 @@ def test_auto_message_uses_the_configured_found_factor_and_unit():
 
     msg = _message("at_floor", 1e-1, 0.5, 0.3, [], found_factor=2.0, unit="N·m")
     assert "<= 2x 3.00e-01 N·m" in msg and "1.5x" not in msg and " rad" not in msg
+
+
+def test_the_search_budget_takes_whole_train_trajectories_in_order_and_keeps_the_held_out_whole():
+    """``auto`` screens and fits on at most ``search_s`` seconds of the train split (first fit, at
+    least one trajectory; 0 or None: all); the held-out split, which every reported error is
+    measured on, is never cut."""
+    from types import SimpleNamespace
+
+    from realm_ms.sysid.space import PositionSpace, within_budget
+
+    trajs = [SimpleNamespace(name=f"t{i}", duration=d) for i, d in enumerate([11.0, 16.0, 6.0, 14.0, 12.0])]
+    assert [t.name for t in within_budget(trajs, 45.0)] == ["t0", "t1", "t2", "t4"]  # 14 s would not fit
+    assert [t.name for t in within_budget(trajs, 5.0)] == ["t0"]
+    assert within_budget(trajs, 0) == trajs and within_budget(trajs, None) == trajs
+    held = [SimpleNamespace(name="h", duration=60.0)]
+    sub = PositionSpace(trajs, held, evaluator=None).searching(20.0)
+    assert [t.name for t in sub.train] == ["t0", "t2"] and sub.heldout is held

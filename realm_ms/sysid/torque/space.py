@@ -212,6 +212,10 @@ class TorqueSpace:
             return list(given)
         return [n for n in TERMS if n in cfg.candidates or not EFFECTS.get(n).screened] + list(SCREENED_VARIANTS)
 
+    def searching(self, budget_s: float | None) -> "TorqueSpace":
+        """All of the data: a least-squares fit simulates nothing, so it has no replay cost to cut."""
+        return self
+
     def screened(self, cfg) -> list[str]:
         """Effect names the default diagnosis screens (``auto``'s contenders and its left-out note)."""
         return [_base(n) for n in self.candidates(cfg)]
