@@ -152,7 +152,7 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb
     if smooth_after > 3 * 0.27e-3:
         assert fitted == ["coulomb_friction", "smooth_friction"]
         assert [s["effect"] for s in out["steps"]] == ["smooth_friction"]
-        assert "not screened here: lugre_friction, link_mass (" in out["details"]["message"]
+        assert "not screened here: lugre_friction, target_interpolation, link_mass (" in out["details"]["message"]
         return
     assert fitted == ["coulomb_friction", "smooth_friction", "lugre_friction"]
     if lugre_after < 0.4e-3:
