@@ -2,7 +2,7 @@
 
     python bench/droid_alignment.py DATA_DIR [--model MODEL.yaml|droid-aligned] [--split heldout|heldin|all]
         [--max-steps N] [--per-lab N] [--episodes N] [--per-episode] [--json OUT.json] [--write-npz DIR]
-        [--grid 'target_filter.tau=0.06,0.08;coulomb_friction.fc=0,0.6']
+        [--grid 'target_filter.tau=0.06,0.08;coulomb_friction.fc=0,0.6' [--leave-one-lab-out]]
 
 DATA_DIR: DROID episodes in any format ``realm sysid`` reads (``../shared/droid_real``: ``index.json`` +
 ``episodes/*.npz`` with ``t``, ``q`` and ``cartesian_position_cmd``), read by
@@ -15,6 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+
+import numpy as np
 
 from realm_ms.errors import UserError
 
@@ -31,6 +33,9 @@ def main(argv=None) -> int:
     ap.add_argument("--grid", default=None, metavar="SPEC",
                     help="search candidates on top of --model: 'effect.param=v1,v2;effect.param=...' (every combination, "
                          "one batch); prints each candidate's overall row, best flange error last")
+    ap.add_argument("--leave-one-lab-out", action="store_true",
+                    help="with --grid: for each lab, the candidate best on the other labs' episodes and this lab's "
+                         "flange error under it (what a lab outside the data should expect)")
     ap.add_argument("--json", default=None)
     ap.add_argument("--write-npz", default=None, metavar="DIR",
                     help="write the selected episodes as the workbench's npz (q_cmd rebuilt from the measured state) instead of replaying them")
@@ -55,10 +60,21 @@ def main(argv=None) -> int:
             return 0
         if args.grid:
             grid = {k.strip(): [float(x) for x in v.split(",")] for k, v in (item.split("=") for item in args.grid.split(";"))}
-            found = sorted(alignment.align_grid(eps, args.model, grid), key=lambda cr: -cr[1].flange_mm)
-            for values, r in found:
+            found = sorted(alignment.align_grid(eps, args.model, grid), key=lambda cr: -cr[1].overall.flange_mm)
+            for values, res in found:
+                r = res.overall
                 print(f"{values}: flange {r.flange_mm:.2f} mm, lag {r.lag_sim:.1f} (real {r.lag_real:.1f}), "
                       f"b {r.b_sim:.3f} (real {r.b_real:.3f})")
+                if args.per_episode:
+                    print("  " + ", ".join(f"{e.name} {e.flange_mm:.1f}" for e in res.episodes))
+            if args.leave_one_lab_out:
+                rows = alignment.leave_one_lab_out(found)
+                for lab, values, mm in rows:
+                    print(f"leave {lab} out: {values} chosen on the other labs; {lab}: flange {mm:.2f} mm")
+                print(f"leave-one-lab-out: median over labs {np.median([mm for _, _, mm in rows]):.2f} mm")
+            if args.json:
+                with open(args.json, "w") as f:
+                    json.dump([{"values": v, **res.to_dict()} for v, res in found], f, indent=1)
             return 0
         res = alignment.align(eps, args.model, args.model or "nominal")
     except (UserError, ValueError, KeyError, FileNotFoundError) as e:

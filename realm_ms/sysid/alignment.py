@@ -9,6 +9,7 @@ on the sysid replay simulator: the benchmark's controller, robot and effects (``
 Metrics, the simulated arm beside the real one (flange = ``panda_link8``, forward kinematics of q):
 
 - ``flange_mm``: median over the steps of |p_sim - p_real| in mm (an episode's flange error);
+  ``free_mm`` the same over the free steps only (no grasp or push: ``interaction.detect``);
 - ``lag``: the steps k (0..``MAX_LAG``) after which the flange is closest, on average over the
   episode, to where a command pointed: argmin_k mean_t |p[t + k] - c[t]|;
 - ``b``: the first-order per-step response p[t+1] - p[t] = b (c[t] - p[t]), least squares over the
@@ -151,6 +152,10 @@ class EpisodeAlignment:
     lag_sim: int
     b_real: float
     b_sim: float
+    # median |p_sim - p_real| over the free steps (neither grasping nor pushing: ``interaction.detect``;
+    # the arm-only replay models neither) and the share of steps left out of it
+    free_mm: float = float("nan")
+    masked: float = 0.0
 
 
 @dataclass
@@ -162,6 +167,7 @@ class LabAlignment:
     lag_sim: float
     b_real: float
     b_sim: float
+    free_mm: float = float("nan")  # median of the episodes' free-step medians
 
 
 @dataclass
@@ -179,37 +185,45 @@ class AlignmentResult:
         return asdict(self)
 
     def table(self, per_episode: bool = False) -> str:
-        head = f"{'':<28} {'eps':>4} {'flange mm':>9} {'lag real':>8} {'lag sim':>7} {'b real':>6} {'b sim':>6}"
+        head = (f"{'':<28} {'eps':>4} {'flange mm':>9} {'free mm':>7} {'lag real':>8} {'lag sim':>7} {'b real':>6} "
+                f"{'b sim':>6}")
         rows = [f"robot model: {self.model}", head]
         if per_episode:
             for e in self.episodes:
-                rows.append(f"{e.name:<28} {1:>4} {e.flange_mm:>9.1f} {e.lag_real:>8d} {e.lag_sim:>7d} "
+                rows.append(f"{e.name:<28} {1:>4} {e.flange_mm:>9.1f} {e.free_mm:>7.1f} {e.lag_real:>8d} {e.lag_sim:>7d} "
                             f"{e.b_real:>6.2f} {e.b_sim:>6.2f}")
         for r in self.labs + ([self.overall] if self.overall else []):
-            rows.append(f"{r.lab:<28} {r.episodes:>4} {r.flange_mm:>9.1f} {r.lag_real:>8.1f} {r.lag_sim:>7.1f} "
-                        f"{r.b_real:>6.2f} {r.b_sim:>6.2f}")
+            rows.append(f"{r.lab:<28} {r.episodes:>4} {r.flange_mm:>9.1f} {r.free_mm:>7.1f} {r.lag_real:>8.1f} "
+                        f"{r.lag_sim:>7.1f} {r.b_real:>6.2f} {r.b_sim:>6.2f}")
         return "\n".join(rows)
 
 
 def summarize(name: str, rows: list[EpisodeAlignment]) -> LabAlignment:
-    med = lambda xs: float(np.median(xs)) if len(xs) else float("nan")  # noqa: E731
+    def med(xs):
+        xs = [x for x in xs if np.isfinite(x)]
+        return float(np.median(xs)) if xs else float("nan")
+
     return LabAlignment(name, len(rows), med([r.flange_mm for r in rows]), med([r.lag_real for r in rows]),
-                        med([r.lag_sim for r in rows]), med([r.b_real for r in rows]), med([r.b_sim for r in rows]))
+                        med([r.lag_sim for r in rows]), med([r.b_real for r in rows]), med([r.b_sim for r in rows]),
+                        med([r.free_mm for r in rows]))
 
 
 def compare_episode(ep: DroidEpisode, q_sim: np.ndarray, ik=None) -> EpisodeAlignment:
     """The metrics of one episode from its simulated joints ``q_sim`` (T, 7)."""
     from realm_ms.agents.droid_action_spaces import DroidIK
+    from realm_ms.sysid.interaction import detect
 
     ik = ik or DroidIK()
     p_real = ik.flange(ep.q)[:, :3, 3]
     p_sim = ik.flange(q_sim)[:, :3, 3]
     c = ep.cartesian_cmd[:, :3]
     d = np.linalg.norm(p_sim - p_real, axis=1) * 1e3
+    masked = detect(ep.traj, ik).masked if ep.traj is not None else np.zeros(ep.steps, bool)
     return EpisodeAlignment(
         ep.name, ep.lab, ep.steps, float(np.median(d)), float(d.mean()),
         [float(x) for x in np.median(np.abs(q_sim - ep.q), axis=0) * 1e3],
-        response_lag(p_real, c), response_lag(p_sim, c), response_b(p_real, c), response_b(p_sim, c))
+        response_lag(p_real, c), response_lag(p_sim, c), response_b(p_real, c), response_b(p_sim, c),
+        float(np.median(d[~masked])) if (~masked).any() else float("nan"), float(masked.mean()))
 
 
 # ---------------------------------------------------------------------------- closed-loop replay
@@ -267,15 +281,17 @@ def _replay_batch(episodes: list[DroidEpisode], model, rows: np.ndarray, sim) ->
     return [out[i, : e.steps * sub : sub] for i, e in enumerate(episodes)]
 
 
-def align_grid(episodes: list[DroidEpisode], model, grid: dict[str, list[float]]) -> list[tuple[dict[str, float], LabAlignment]]:
+def align_grid(episodes: list[DroidEpisode], model, grid: dict[str, list[float]]) -> list[tuple[dict[str, float], AlignmentResult]]:
     """Every combination of the ``grid`` values (``{"target_filter.tau": [0.06, 0.08], ...}``, keys
     ``effect.param``, per-joint names set all joints) on top of ``model``, each replayed on every
-    episode in one batch (a row per episode and candidate): ``[(values, overall row), ...]``."""
+    episode in one batch (a row per episode and candidate): ``[(values, its AlignmentResult), ...]``."""
     import itertools
+    import time
 
     from realm_ms.agents.effects import make_effect
     from realm_ms.agents.robot_model import load_robot_model
 
+    t0 = time.perf_counter()
     base = load_robot_model(model).copy()
     keys = list(grid)
     combos = [dict(zip(keys, c)) for c in itertools.product(*(grid[k] for k in keys))]
@@ -294,10 +310,22 @@ def align_grid(episodes: list[DroidEpisode], model, grid: dict[str, list[float]]
     from realm_ms.agents.droid_action_spaces import DroidIK
 
     ik = DroidIK()
+    seconds = time.perf_counter() - t0
+    return [(c, tabulate([compare_episode(e, s, ik) for e, s in zip(episodes, sims[i * rows_per:(i + 1) * rows_per])],
+                         ", ".join(f"{k}={v:g}" for k, v in c.items()), seconds))
+            for i, c in enumerate(combos)]
+
+
+def leave_one_lab_out(found: list[tuple[dict[str, float], AlignmentResult]]) -> list[tuple[str, dict[str, float], float]]:
+    """What a lab outside the data should expect from choosing on the others: for each lab of a grid's
+    results (``align_grid``), the candidate with the smallest median flange error over the *other*
+    labs' episodes, and this lab's median under it: ``[(lab, values, flange_mm), ...]``."""
+    labs = sorted({e.lab for e in found[0][1].episodes})
     out = []
-    for i, c in enumerate(combos):
-        rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims[i * rows_per:(i + 1) * rows_per])]
-        out.append((c, summarize("all", rows)))
+    for lab in labs:
+        med = lambda r, keep: float(np.median([e.flange_mm for e in r.episodes if keep(e.lab)]))  # noqa: E731
+        values, res = min(found, key=lambda cr: med(cr[1], lambda x: x != lab))
+        out.append((lab, values, med(res, lambda x: x == lab)))
     return out
 
 
@@ -311,9 +339,14 @@ def align(episodes: list[DroidEpisode], model=None, model_name: str | None = Non
     sims = replay_closed_loop(episodes, model)
     ik = DroidIK()
     rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims)]
-    labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
     name = model_name or (str(model) if model is not None and not isinstance(model, dict) else "nominal")
-    return AlignmentResult(name, rows, labs, summarize("all", rows), time.perf_counter() - t0)
+    return tabulate(rows, name, time.perf_counter() - t0)
+
+
+def tabulate(rows: list[EpisodeAlignment], model_name: str, seconds: float) -> AlignmentResult:
+    """Per-episode rows, per-lab medians and the overall medians of one model."""
+    labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
+    return AlignmentResult(model_name, rows, labs, summarize("all", rows), seconds)
 
 
 # ---------------------------------------------------------------------------- the workbench's npz

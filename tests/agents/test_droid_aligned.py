@@ -21,7 +21,7 @@ REALM = Path(sys.executable).parent / "realm"  # the installed command, as a use
 def test_the_named_model_ships_with_its_provenance_and_droids_credit():
     assert named_model_path("droid-aligned").is_file()
     m = load_robot_model("droid-aligned")
-    assert "target_filter" in m.names and m.gains == "realm"
+    assert "target_filter" in m.names and m.gains == "polymetis"
     prov = m.provenance
     assert "Khazatsky" in prov["credit"] and "CC-BY 4.0" in prov["credit"]
     for key in ("data", "command", "created", "realm_ms", "heldout"):

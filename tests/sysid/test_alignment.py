@@ -72,7 +72,7 @@ def test_closed_loop_replay_sees_a_hidden_delay(tmp_path):
     assert true.overall.lag_sim == true.overall.lag_real
     assert "LAB" in nominal.table() and nominal.to_dict()["overall"]["episodes"] == 2
     # a grid over the delay picks the true one: the candidates run as rows of one batch
-    found = dict((c["latency.delay"], r) for c, r in al.align_grid(eps, None, {"latency.delay": [0.0, 0.05, 0.1]}))
+    found = dict((c["latency.delay"], r.overall) for c, r in al.align_grid(eps, None, {"latency.delay": [0.0, 0.05, 0.1]}))
     assert found[0.1].flange_mm < 0.05 < found[0.05].flange_mm < found[0.0].flange_mm
     assert found[0.0].flange_mm == pytest.approx(nominal.overall.flange_mm, rel=1e-3)
 
@@ -147,5 +147,17 @@ def test_episodes_of_different_lengths_replay_in_their_own_batches(tmp_path, mon
     assert [len(x) for x in apart] == [20, 60]
     for a, b in zip(apart, together):
         np.testing.assert_allclose(a, b, atol=1e-5)
-    found = dict((c["latency.delay"], r) for c, r in al.align_grid(eps, None, {"latency.delay": [0.0, 0.05]}))
+    found = dict((c["latency.delay"], r.overall) for c, r in al.align_grid(eps, None, {"latency.delay": [0.0, 0.05]}))
     assert found[0.05].flange_mm == pytest.approx(al.align(eps, model).overall.flange_mm, abs=1e-3)
+
+
+def test_leave_one_lab_out_chooses_each_labs_candidate_on_the_other_labs():
+    def ep(name, lab, mm):
+        return al.EpisodeAlignment(name, lab, 10, mm, mm, [0.0] * 7, 4, 4, 0.2, 0.2)
+
+    # candidate a suits labs A and B, candidate b suits lab C only
+    a = al.tabulate([ep("a1", "A", 1.0), ep("b1", "B", 2.0), ep("c1", "C", 9.0)], "a", 0.0)
+    b = al.tabulate([ep("a1", "A", 5.0), ep("b1", "B", 6.0), ep("c1", "C", 3.0)], "b", 0.0)
+    rows = al.leave_one_lab_out([({"x": 1.0}, a), ({"x": 2.0}, b)])
+    # leaving A out, B (2 vs 6) and C (9 vs 3) give medians 5.5 vs 4.5: b is chosen and A reads 5
+    assert rows == [("A", {"x": 2.0}, 5.0), ("B", {"x": 2.0}, 6.0), ("C", {"x": 1.0}, 9.0)]

@@ -8,7 +8,8 @@ from realm_ms.agents.effects import CONFOUNDS, EFFECTS, make_effect
 from realm_ms.sysid.effect_spec import parse_effects
 
 NAMES = ["coulomb_friction", "viscous_damping", "stribeck_friction", "smooth_friction", "lugre_friction", "armature",
-         "payload", "gravity_comp_error", "latency", "target_filter", "gain_mismatch", "torque_limit", "backlash", "encoder_bias", "link_mass"]
+         "payload", "gravity_comp_error", "latency", "target_filter", "target_interpolation",
+         "gain_mismatch", "torque_limit", "backlash", "encoder_bias", "link_mass"]
 UNITS = {"N·m", "N·m·s/rad", "kg·m²", "kg", "m", "s", "rad", "rad/s", "N·m/s", "N·m/rad", "1"}
 
 
@@ -206,3 +207,23 @@ def test_symmetric_coulomb_shortcut_equals_the_asymmetric_law():
     assert torch.equal(sym[:2], full[:2])
     assert torch.equal(sym[:, [2]], torch.zeros(3, 1))  # at rest: no torque
     assert (full[2, [0, 5]].abs() > sym[2, [0, 5]].abs()).all() and (full[2, [1, 6]].abs() < sym[2, [1, 6]].abs()).all()
+
+
+def test_target_interpolation_ramps_to_each_new_target():
+    """Linear: equal steps, the target reached after ``duration``; min-jerk: the quintic, slow at both
+    ends; a target arriving mid-ramp starts a new ramp from the point reached; 0 steps at once."""
+    from types import SimpleNamespace
+
+    state = SimpleNamespace(dt=0.01)
+
+    def ramp(values, config, targets):
+        fx = make_effect("target_interpolation", values, config)
+        fx.reset(1, "cpu", None, torch.zeros(1, 7))
+        return [float(fx.command(torch.full((1, 7), t), state)[0, 0]) for t in targets]
+
+    assert ramp({"duration": 0.05}, {}, [1.0] * 6) == pytest.approx([0.2, 0.4, 0.6, 0.8, 1.0, 1.0])
+    s = np.array([0.2, 0.4, 0.6, 0.8, 1.0])
+    assert ramp({"duration": 0.05}, {"min_jerk": True}, [1.0] * 5) == pytest.approx(s ** 3 * (10 - 15 * s + 6 * s ** 2), abs=1e-6)
+    # 0.4 reached when the target moves to 2: the next ramp runs from 0.4 to 2 in 5 steps
+    assert ramp({"duration": 0.05}, {}, [1.0, 1.0, 2.0, 2.0]) == pytest.approx([0.2, 0.4, 0.72, 1.04])
+    assert ramp({"duration": 0.0}, {}, [1.0, 3.0]) == pytest.approx([1.0, 3.0])

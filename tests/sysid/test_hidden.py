@@ -102,6 +102,20 @@ def test_hidden_effect_fast(tmp_path, ev, name, rate):
     check_fit(info, train, held, d, ev, [name])
 
 
+def test_hidden_command_interpolation_is_told_from_its_look_alikes(tmp_path, ev):
+    """A ramp between the 15 Hz targets, screened against the other forms a command path can take
+    (transport delay, first-order filter): named first, fitted to within 20 % and to the floor."""
+    from realm_ms.sysid.diagnose import DiagnoseConfig
+
+    hidden = "target_interpolation:duration=0.1"
+    info = synth(hidden, tmp_path, SynthConfig(seed=0, noise_rad=NOISE, n_train=2, n_heldout=1, duration_s=3.0), evaluator=ev)
+    train, held = load_split(tmp_path)
+    cfg = DiagnoseConfig(candidates=("latency", "target_filter", "target_interpolation"))
+    d = diagnose(train, held, config=cfg, evaluator=ev, log=lambda *a: None)
+    assert d.suspects[0].effect == "target_interpolation", [s.effect for s in d.suspects]
+    check_fit(info, train, held, d, ev, ["target_interpolation"])
+
+
 def test_no_hidden_effect_fast(tmp_path, ev):
     _, _, _, d = run_case(tmp_path, ev, "none", seed=0, rate=15.0, small=True)
     assert d.verdict == "no_missing_effect" and not d.missing_effect_found and not d.unexplained, d.message

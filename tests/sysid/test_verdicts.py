@@ -154,19 +154,21 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb
                                           {"effect": "lugre_friction", "heldout_rmse": 0.6e-3}]
     # partially explained: the message names the library effects the run left out (LuGre was fitted)
     assert out["final"]["verdict"] == "partially_explained"
-    assert "not screened here: link_mass (" in out["details"]["message"]
+    assert "not screened here: target_interpolation, link_mass (" in out["details"]["message"]
 
 
 def test_auto_names_the_library_effects_it_did_not_screen():
-    """Position space screens link_mass (and LuGre) only on request: a residual auto leaves there is
-    no proof that the library lacks the effect, and its message says which ones it left out."""
+    """Position space screens link_mass (and LuGre, and the target ramp) only on request: a residual
+    auto leaves there is no proof that the library lacks the effect, and its message says which ones
+    it left out."""
     from realm_ms.agents.effects import EFFECTS
     from realm_ms.sysid.auto import _message
     from realm_ms.sysid.diagnose import unscreened
 
     left = unscreened(DiagnoseConfig().candidates, {"gravity_comp_error"})
-    assert "link_mass" in left and "lugre_friction" in left and "coulomb_friction" not in left
-    assert unscreened(DiagnoseConfig().candidates, {"link_mass", "lugre_friction"}) == []
+    assert "link_mass" in left and "lugre_friction" in left and "target_interpolation" in left
+    assert "coulomb_friction" not in left
+    assert unscreened(DiagnoseConfig().candidates, {"link_mass", "lugre_friction", "target_interpolation"}) == []
     assert unscreened(tuple(EFFECTS), set()) == []
     partial = _message("partially_explained", 7.7e-3, 3.4e-3, 2.7e-4, [], None, left)
     assert f"--candidates {','.join(left)}" in partial and "not screened or outside the library" in partial

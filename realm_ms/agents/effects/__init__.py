@@ -30,6 +30,7 @@ from realm_ms.agents.effects.payload import Payload
 from realm_ms.agents.effects.smooth_friction import SmoothFriction
 from realm_ms.agents.effects.stribeck_friction import StribeckFriction
 from realm_ms.agents.effects.target_filter import TargetFilter
+from realm_ms.agents.effects.target_interpolation import TargetInterpolation
 from realm_ms.agents.effects.torque_limit import TorqueLimit
 from realm_ms.agents.effects.viscous_damping import ViscousDamping
 from realm_ms.errors import InputError
@@ -38,13 +39,15 @@ from realm_ms.registry import Registry
 EFFECTS: Registry[type[Effect]] = Registry("effect")
 
 for _cls in (CoulombFriction, ViscousDamping, StribeckFriction, SmoothFriction, LuGreFriction, Armature, Payload,
-             GravityCompError, Latency, TargetFilter, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass):
+             GravityCompError, Latency, TargetFilter, TargetInterpolation, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass):
     EFFECTS.register(_cls.name, _cls)
 
 #: pairs the position data of one gain setting cannot always separate; diagnosis reports both
 CONFOUNDS: list[tuple[str, str]] = [
     ("latency", "viscous_damping"),
     ("latency", "target_filter"),
+    ("latency", "target_interpolation"),
+    ("target_filter", "target_interpolation"),
     ("payload", "gravity_comp_error"),
     ("coulomb_friction", "stribeck_friction"),
     ("coulomb_friction", "smooth_friction"),

@@ -42,17 +42,14 @@ def response_time_ms(b: float, hz: float = 15.0) -> float:
     return float(-1e3 / hz / np.log(1.0 - b))
 
 
-def run_model(label: str, episodes, model, free: list[np.ndarray]) -> ModelRun:
+def run_model(label: str, episodes, model) -> ModelRun:
     from realm_ms.agents.droid_action_spaces import DroidIK
     from realm_ms.sysid.alignment import compare_episode, replay_closed_loop, summarize
 
     sims = replay_closed_loop(episodes, model)
     ik = DroidIK()
     rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims)]
-    free_mm = []
-    for e, s, f in zip(episodes, sims, free):
-        d = np.linalg.norm(ik.flange(s)[:, :3, 3] - ik.flange(e.q)[:, :3, 3], axis=1) * 1e3
-        free_mm.append(float(np.median(d[f])) if f.any() else float("nan"))
+    free_mm = [r.free_mm for r in rows]
     labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
     return ModelRun(label, sims, rows, free_mm, summarize("all", rows), labs)
 
@@ -207,7 +204,7 @@ def build_align_report(episodes, model, model_name: str, out: Path, data_name: s
     runs = []
     for label, m in steps:
         log(f"align: replaying {len(episodes)} episodes closed loop under {label}")
-        runs.append(run_model(label, episodes, m, free))
+        runs.append(run_model(label, episodes, m))
     if model is not None:
         runs[-1].label = model_name
     seconds = time.perf_counter() - t0

@@ -22,8 +22,8 @@ the motors must *add* (friction has the sign of q̇, as in Gaz et al. 2019).
 Y_k is body k's inverse-dynamics regressor (``agents/effects/inertial.py``), computed once per
 sample set, so a fit of inertial parameters costs no dynamics evaluations.
 
-eps = 0.01 rad/s (the smooth sign). Tracking effects (latency, target_filter, gain_mismatch, torque_limit,
-backlash, encoder_bias) act through the position controller and have no torque-space form: they
+eps = 0.01 rad/s (the smooth sign). Tracking effects (latency, target_filter, target_interpolation, gain_mismatch,
+torque_limit, backlash, encoder_bias) act through the position controller and have no torque-space form: they
 need ``q_cmd`` (``TRACKING_ONLY``: the library effects without a term here). ``TERMS`` is the one
 table of each effect's torque; its evidence sentence is ``signatures.SENTENCES``.
 """
