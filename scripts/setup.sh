@@ -85,9 +85,7 @@ install_venv() {
   fi
   log "installing realm-ms and its dependencies (first time: several minutes)"
   .venv/bin/python -m pip install -q --upgrade pip >/dev/null 2>&1 || true
-  # --no-compile: no bytecode for the ~40k files of torch & co. up front (a third of the set-up's
-  # time); Python compiles each module the first time it is imported, and only those
-  quiet_pip --no-compile -e ".[dev]"
+  quiet_pip -e ".[dev]"
   # metadata-only distribution named lerobot_env_*: LeRobot auto-imports such distributions, which
   # registers the `realm` env type for `lerobot-eval --env.type=realm` (docs/lerobot.md)
   quiet_pip --no-deps ./lerobot_env_realm/_distribution
