@@ -320,10 +320,11 @@ def leave_one_lab_out(found: list[tuple[dict[str, float], AlignmentResult]]) -> 
     """What a lab outside the data should expect from choosing on the others: for each lab of a grid's
     results (``align_grid``), the candidate with the smallest median flange error over the *other*
     labs' episodes, and this lab's median under it: ``[(lab, values, flange_mm), ...]``."""
-    labs = sorted({e.lab for e in found[0][1].episodes})
+    def med(res: AlignmentResult, keep) -> float:
+        return float(np.median([e.flange_mm for e in res.episodes if keep(e.lab)]))
+
     out = []
-    for lab in labs:
-        med = lambda r, keep: float(np.median([e.flange_mm for e in r.episodes if keep(e.lab)]))  # noqa: E731
+    for lab in sorted({e.lab for e in found[0][1].episodes}):
         values, res = min(found, key=lambda cr: med(cr[1], lambda x: x != lab))
         out.append((lab, values, med(res, lambda x: x == lab)))
     return out

@@ -183,9 +183,10 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
             break
         fitted = []
         for sus in contenders(cands, screened, tried, space.library())[: cfg.max_fits - fits]:
-            if sus.effect not in screened and fitted and min(a for a, _, _ in fitted) > cfg.unscreened_within * floor:
+            best = min((a for a, _, _ in fitted), default=None)
+            if sus.effect not in screened and best is not None and best > cfg.unscreened_within * floor:
                 log(f"auto: not fitting {sus.effect} (a look-alike diagnose does not screen): the best screened "
-                    f"contender ends at {min(a for a, _, _ in fitted) / floor:.1f}x the floor, above "
+                    f"contender ends at {best / floor:.1f}x the floor, above "
                     f"{cfg.unscreened_within:g}x")
                 continue
             tried.add(sus.effect)

@@ -44,14 +44,12 @@ def response_time_ms(b: float, hz: float = 15.0) -> float:
 
 def run_model(label: str, episodes, model) -> ModelRun:
     from realm_ms.agents.droid_action_spaces import DroidIK
-    from realm_ms.sysid.alignment import compare_episode, replay_closed_loop, summarize
+    from realm_ms.sysid.alignment import compare_episode, replay_closed_loop, tabulate
 
     sims = replay_closed_loop(episodes, model)
     ik = DroidIK()
-    rows = [compare_episode(e, s, ik) for e, s in zip(episodes, sims)]
-    free_mm = [r.free_mm for r in rows]
-    labs = [summarize(lab, [r for r in rows if r.lab == lab]) for lab in sorted({r.lab for r in rows})]
-    return ModelRun(label, sims, rows, free_mm, summarize("all", rows), labs)
+    res = tabulate([compare_episode(e, s, ik) for e, s in zip(episodes, sims)], label, 0.0)
+    return ModelRun(label, sims, res.episodes, [r.free_mm for r in res.episodes], res.overall, res.labs)
 
 
 def waterfall_models(model):
