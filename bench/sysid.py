@@ -87,7 +87,7 @@ def run_auto(args, data: Path, space: str) -> dict:
     return r
 
 
-#: the DROID-format bench's hidden robot: a command pipeline delay and softer gains (issue #45)
+#: the DROID-format bench's hidden robot: a command pipeline delay and softer gains
 DROID_HIDDEN = "latency:delay=0.06,gain_mismatch:stiffness_error=-0.3,damping_error=0.2"
 
 
