@@ -194,6 +194,21 @@ class CameraSettings:
         return camera_shader_config(self.shader, self.denoiser)
 
 
+#: one render system per render device, alive for the whole process (see keep_renderer)
+_KEPT: dict[str, object] = {}
+
+
+def keep_renderer(device) -> None:
+    """Hold a render system on ``device`` (a ``sapien.Device``) for the rest of the process. SAPIEN
+    frees its Vulkan renderer when the last scene using it goes, and a new renderer recomputes its
+    512 x 512 BRDF lookup table on its first picture: 6.7 s of CPU under lavapipe, paid again by
+    every env made after another was closed. Kept alive, only a process's first env pays it."""
+    import sapien
+
+    if device is not None and str(device) not in _KEPT:
+        _KEPT[str(device)] = sapien.render.RenderSystem(device)
+
+
 def light_gain(shader: str) -> float:
     """Multiplier a scene applies to all its light colours under ``shader`` (see ``LIGHT_GAIN``)."""
     _check_shader(shader)

@@ -2,8 +2,8 @@
 the denoiser is decided once (and never silently), V-LIGHT maps onto our light units.
 Runs on lavapipe (CPU) in CI and on a GPU: frames are checked by statistics, not pixels.
 
-Each shader renders in a child process, so that one render's crash names its shader instead of
-killing the test session. Ray-traced frames on lavapipe are rendered one camera at a time
+Each ray-traced shader renders in a child process, so that one render's crash names its shader
+instead of killing the test session; the raster shader renders in the test process. Ray-traced frames on lavapipe are rendered one camera at a time
 (``RealmEnv.capture_sensor_data``): with all three in flight at once, the child crashed in about
 one run in two and the frames that survived differed from run to run.
 """
@@ -30,30 +30,39 @@ MEAN_TOL = 15.0
 CONTRAST_TOL = (0.75, 1.33)
 
 
-_CHILD = """
-import json, sys, warnings
-import gymnasium as gym
-import numpy as np
-import realm_ms
-from realm_ms import rendering
+def render(env_id: str, shader: str, size: dict) -> tuple[dict, dict]:
+    """(camera -> HxWx3 uint8, camera -> ray-tracing denoiser) of ``env_id`` after reset (seed 0)."""
+    import gymnasium as gym
 
-env_id, shader, out = sys.argv[1], sys.argv[2], sys.argv[3]
-size = json.loads(sys.argv[4])
-with warnings.catch_warnings(), rendering.rt_samples_per_pixel(4):
-    warnings.simplefilter("ignore")
-    env = gym.make(env_id, obs_mode="rgb", shader=shader, **size)
-    obs, _ = env.reset(seed=0)
-    np.savez(out, **{cam: obs["sensor_data"][cam]["rgb"][0].cpu().numpy() for cam in obs["sensor_data"]})
-    denoisers = {k: c.shader_config.shader_pack_config.get("ray_tracing_denoiser") for k, c in env.unwrapped._sensor_configs.items()}
-    with open(out + ".json", "w") as f:
-        json.dump(denoisers, f)
-    env.close()
+    with warnings.catch_warnings(), rendering.rt_samples_per_pixel(4):
+        warnings.simplefilter("ignore")
+        env = gym.make(env_id, obs_mode="rgb", shader=shader, **size)
+        try:
+            obs, _ = env.reset(seed=0)
+            frames = {cam: obs["sensor_data"][cam]["rgb"][0].cpu().numpy() for cam in obs["sensor_data"]}
+            denoisers = {k: c.shader_config.shader_pack_config.get("ray_tracing_denoiser")
+                         for k, c in env.unwrapped._sensor_configs.items()}
+        finally:
+            env.close()
+    return frames, denoisers
+
+
+_CHILD = """
+import json, sys
+import numpy as np
+sys.path.insert(0, sys.argv[5])
+from test_rendering import render
+
+frames, denoisers = render(sys.argv[1], sys.argv[2], json.loads(sys.argv[4]))
+np.savez(sys.argv[3], **frames)
+with open(sys.argv[3] + ".json", "w") as f:
+    json.dump(denoisers, f)
 """
 
 
 def _render_in_child(shader: str, out: Path) -> tuple[dict, dict]:
-    """(camera -> HxWx3 uint8, camera -> ray-tracing denoiser) of ``ENV`` after reset (seed 0)."""
-    cmd = [sys.executable, "-c", _CHILD, ENV, shader, str(out), json.dumps(SIZE)]
+    """:func:`render` in a child process."""
+    cmd = [sys.executable, "-c", _CHILD, ENV, shader, str(out), json.dumps(SIZE), str(Path(__file__).parent)]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     if res.returncode != 0:
         pytest.fail(f"{shader} render exited {res.returncode}:\n{res.stdout[-2000:]}\n{res.stderr[-4000:]}")
@@ -64,13 +73,15 @@ def _render_in_child(shader: str, out: Path) -> tuple[dict, dict]:
 
 @pytest.fixture(scope="module")
 def frames(tmp_path_factory):
-    """{shader: {camera: HxWx3 uint8}} of one task after reset (seed 0), each shader in a child
-    process (see the module docstring). ``rt`` keeps its path depth but renders 4 spp instead of 32
-    so the module stays within CI time on lavapipe."""
+    """{shader: {camera: HxWx3 uint8}} of one task after reset (seed 0), each ray-traced shader in a
+    child process (see the module docstring), the raster one in this process. ``rt`` keeps its path
+    depth but renders 4 spp instead of 32 so the module stays within CI time on lavapipe."""
     out = {}
     tmp = tmp_path_factory.mktemp("frames")
     for shader in SHADERS:
-        out[shader], out[shader + "/denoisers"] = _render_in_child(shader, tmp / shader)
+        render_here = shader == "default"
+        out[shader], out[shader + "/denoisers"] = (render(ENV, shader, SIZE) if render_here else
+                                                   _render_in_child(shader, tmp / shader))
     out["rt-fast/again"], _ = _render_in_child("rt-fast", tmp / "rt-fast-again")
     return out
 
@@ -114,6 +125,17 @@ def test_one_denoiser_for_every_camera(frames, shader):
     assert set(CAMERAS) <= set(denoisers)
     chosen = {denoisers[cam] for cam in CAMERAS}
     assert chosen == {rendering.resolve_denoiser("auto")}
+
+
+@pytest.mark.render
+def test_the_next_env_keeps_the_renderer_and_renders_the_same_frames(frames):
+    """An env made after another was closed reuses the process's renderer (``keep_renderer``: a new
+    one recomputes its BRDF table on its first picture, seconds on lavapipe) and renders the same
+    frames as the first env did."""
+    again, _ = render(ENV, "default", SIZE)
+    assert len(rendering._KEPT) == 1
+    for cam in CAMERAS:
+        assert np.array_equal(again[cam], frames["default"][cam]), cam
 
 
 def test_denoiser_is_probed_and_never_silent():

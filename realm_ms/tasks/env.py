@@ -29,7 +29,7 @@ from mani_skill.utils.structs.types import GPUMemoryConfig, SceneConfig, SimConf
 from realm_ms.agents.control import DroidControlConfig
 from realm_ms.agents.panda_droid import PandaDroid
 from realm_ms.known_warnings import install as _silence_known_warnings
-from realm_ms.rendering import camera_shader_config, is_ray_traced, vertical_fov
+from realm_ms.rendering import camera_shader_config, is_ray_traced, keep_renderer, vertical_fov
 from realm_ms.tasks.perturbation_set import PerturbationSet
 from realm_ms.tasks.placement import sample_placements
 from realm_ms.tasks.progression import ProgressionTracker, StageInputs
@@ -94,6 +94,7 @@ class RealmEnv(BaseEnv):
         # (rendering works on the CPU through Vulkan, lavapipe included): ask for what is there
         kwargs.setdefault("render_backend", "gpu" if torch.cuda.is_available() else "cpu")
         super().__init__(*args, robot_uids=robot_uids, **kwargs)
+        keep_renderer(self._render_device)  # the next env in this process reuses the renderer
         # the full description, ManiSkill's part included: records store it, make_env re-creates the env
         self.config = dataclasses.replace(
             config, task=self.task_spec.env_id, obs_mode=self.obs_mode, control_mode=self.control_mode,
