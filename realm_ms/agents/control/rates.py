@@ -106,6 +106,7 @@ class PathRate:
         self.cfg, self.extend = cfg, extend
         self.steps = cfg.path_steps
         self.horizon = self.steps  # steps of the current plan (1 while the target moves at every step)
+        self._all_moved = False  # every row's target moved at the last step
         self.plan = self.dt = self._r = None
         self.plans = 0  # plans made (full or for some rows): a diagnostic
         # True: the tracked target may change without ``retarget`` (command stages such as latency),
@@ -114,7 +115,7 @@ class PathRate:
         self._retargeted = True
 
     def reset(self) -> None:
-        self.plan = None
+        self.plan, self._all_moved = None, False
 
     def retarget(self) -> None:
         """Rows whose target changed re-plan on their next step (``terms`` compares the targets)."""
@@ -132,13 +133,16 @@ class PathRate:
             if off is None:
                 off = (be.abs(q - p["q"][r, j]) > self.cfg.path_tolerance).any(-1)
             need = (p["k"] >= self.horizon) | off
+            all_moved = False
             if self.targets_move or self._retargeted:
                 moved = (q_t != p["target"]).any(-1)
                 need = need | moved
-                # every row's target moved one step into its plan: the target moves at every step
+                all_moved = bool(moved.all())
+                # every row's target moved at this step and the last: the target moves at every step
                 # (a command filter), each plan is replaced after its first step, and the rest of a
                 # longer one would be evaluated for nothing
-                moving = bool(moved.all()) and bool((p["k"] == 1).all())
+                moving = all_moved and self._all_moved and bool((p["k"] == 1).all())
+            self._all_moved = all_moved
             if need.any():
                 rows = be.rows(need)
                 full = len(rows) == b
