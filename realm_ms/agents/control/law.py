@@ -135,9 +135,9 @@ def plan_path(be, cfg, q, qd, q_t, gains, arm, extra, ext, dt: float, steps: int
     model's own. ``dg`` (dg/dq at q, its 2n configurations in the same batch) corrects gravity to
     first order for the measured q. ``predictor``: (Phi, Kp) from the previous plan at the state it
     predicted for now (saves a model evaluation). ``correct_gravity=False``: no ``dg`` (zeros), for a
-plan used only at the q it was taken at (its first step, which is exact), where the correction is
-zero. Returns "q", "bias", "mass", "minv", "phi",
-    "kp", "kd" (B, steps, ...) and per row "target", "dg", "k" (the step index)."""
+    plan used only at the q it was taken at (its first step, which is exact), where the correction
+    is zero. Returns "q", "bias", "mass", "minv", "phi", "kp", "kd" (B, steps, ...) and per row
+    "target", "dg", "k" (the step index)."""
     (b, n), ticks = q.shape, tick_count(dt, cfg.law_hz)
     if predictor is None:
         t = terms_at(be, cfg, q, qd, gains, arm, extra, dt)
