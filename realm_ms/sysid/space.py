@@ -101,21 +101,12 @@ class PositionSpace:
         return fit(self.train, self.heldout, model, config, self.evaluator, self.progress, log)
 
     def fit_suspect(self, model: RobotModel, suspect, config, log=print) -> FitResult:
-        """``auto``'s step: CMA-ES from the screened values, jointly with the model's own effects.
-
-        A screened suspect's values already come out of the diagnosis's linearised steps (from its
-        off-values and, where those are inert, from its typical strengths, then a full-Jacobian
-        refinement for the best): the fit takes one block-probe linearised step from them before
-        CMA-ES, rather than ``fit``'s two iterations from two starts (the second start and the
-        full-Jacobian iteration are most of a fit's replay when the model already holds effects).
-        A look-alike the diagnosis does not screen (no values) gets ``fit``'s full start."""
+        """``auto``'s step: CMA-ES from the screened values, jointly with the model's own effects."""
         from realm_ms.sysid.auto import _start_spec
 
-        screened = bool(suspect.params)
         # the loop reports values and held-out errors, not intervals: no uncertainty batch
         cfg = FitConfig(add=_start_spec(suspect.effect, suspect.params), generations=config.generations,
-                        popsize=config.popsize, seed=config.seed, uncertainty=False, patience=config.patience,
-                        **({"gn_iterations": 1, "multistart": False} if screened else {}))
+                        popsize=config.popsize, seed=config.seed, uncertainty=False, patience=config.patience)
         return fit(self.train, self.heldout, model, cfg, self.evaluator, progress=False, log=log)
 
     def details(self, diagnosis: Diagnosis, model: RobotModel) -> tuple[dict, str]:
