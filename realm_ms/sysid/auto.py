@@ -19,7 +19,7 @@ Verdict: ``at_floor`` (the final model is within ``found_factor`` x the judging 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -215,6 +215,9 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         if current <= dcfg.found_factor * floor or len([s for s in steps if s.kept]) >= cfg.max_steps:
             break
         bar.set_description("auto: diagnosing")
+        # the effects the last diagnosis had to re-screen from typical strengths (their parameters do
+        # nothing at their off-values on this data) get that start in its first batches this time
+        dcfg = replace(dcfg, typical_starts=tuple(dict.fromkeys(dcfg.typical_starts + tuple(d.rescreened))))
         d = space.diagnose(model, dcfg, log=quiet)
         noise = min(noise, float(d.noise_floor))  # the estimate is inflated by model error: keep the lowest
         floor = judging_floor(noise, space.replay_floor(dcfg))

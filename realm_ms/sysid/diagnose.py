@@ -59,6 +59,10 @@ class DiagnoseConfig:
     replay_floor_rad: float = 2.5e-4
     confound_margin: float = 0.35  # relative difference of remaining held-out error within which a pair is confounded
     retune_model: bool = True  # re-fit the given model's parameters together with each candidate
+    # candidates also stepped from their typical strengths in the first pass's own batches (``auto``
+    # passes those its last diagnosis re-screened: whether an effect's parameters do nothing at its
+    # off-values is the effect's and the data's, not the model's); the others get a round of their own
+    typical_starts: tuple[str, ...] = ()
 
 
 #: JSON key suffix of each space's unit (``heldout_rmse_rad``, ``heldout_rmse_nm``)
@@ -112,6 +116,8 @@ class Diagnosis:
     unit: str = "rad"
     replayed: Replayed | None = None  # position space only
     split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
+    # candidates whose own parameters did nothing at their off-values, stepped from typical strengths too
+    rescreened: list[str] = field(default_factory=list)
 
     @property
     def missing_effect_found(self) -> bool:
@@ -163,6 +169,7 @@ class _Screened:
     train_mse: np.ndarray
     heldout_mse: np.ndarray
     heldout_sim: list[np.ndarray]
+    rescreened: list[str]  # candidates stepped from their typical strengths too (own parameters inert at off)
 
 
 def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | None = None,
@@ -220,7 +227,8 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     # the verdict (msg) is printed once, by the caller (CLI: on stdout)
     masked = {t.name: t.meta["interaction"] for t in train + heldout if "interaction" in t.meta}
     return Diagnosis(b_he.rmse, b_tr.rmse, floor, floor_j, np.sqrt(b_he.per_joint_mse[0]), suspects, msg, verdict, judge,
-                     replayed=Replayed(feats, he_ss.saturated_fraction, he_ss.interaction_fraction, masked))
+                     replayed=Replayed(feats, he_ss.saturated_fraction, he_ss.interaction_fraction, masked),
+                     rescreened=sc.rescreened)
 
 
 def _log_masked(tr_ss: SegmentSet, he_ss: SegmentSet, log) -> None:
@@ -239,8 +247,15 @@ def _screen(ev, tr_ss, he_ss, fixed, groups: list[Group], names: list[str], b_he
     """Block-diagonal secant sensitivities, one LM step per effect, scored on held-out. An effect
     with parameters that do nothing at its off-values (a payload's centre of mass at zero mass) gets
     one linearised step from its typical strengths too, as a fit's second start does, unless a
-    first-pass candidate already reaches the floor (it leaves the others nothing to win but a tie)."""
-    steps = linearized_step(ev, tr_ss, fixed, groups, first=True, block=True, also=[he_ss])
+    first-pass candidate already reaches the floor (it leaves the others nothing to win but a tie).
+    The candidates in ``cfg.typical_starts`` are stepped from their typical strengths in the same
+    batches as the first pass (a batch costs mostly per physics step, so a second round of batches
+    costs about as much as the first); any other candidate found inert gets a round of its own."""
+    own = [{p.key for p in g.effects[0].free_params} for g in groups]
+    early = [i for i, n in enumerate(names) if n in cfg.typical_starts]
+    alts = {i: typical_start(groups[i], own[i]) for i in early}
+    both = linearized_step(ev, tr_ss, fixed, groups + [alts[i] for i in early], first=True, block=True, also=[he_ss])
+    steps, alt_steps = both[:len(groups)], dict(zip(early, both[len(groups):]))
     inert = {i: _own_insensitive(g, st) for i, (g, st) in enumerate(zip(groups, steps))}
     redo = [i for i, keys in inert.items() if keys]
     if redo:
@@ -255,13 +270,18 @@ def _screen(ev, tr_ss, he_ss, fixed, groups: list[Group], names: list[str], b_he
     if redo:
         log("re-screening " + ", ".join(f"{names[i]} (at its off-values {', '.join(inert[i])} change nothing)" for i in redo)
             + " from typical strengths")
-        alts = [typical_start(groups[i], {p.key for p in groups[i].effects[0].free_params}) for i in redo]
-        for i, g, st in zip(redo, alts, linearized_step(ev, tr_ss, fixed, alts, first=True, block=True, also=[he_ss])):
-            if st.improved and st.mse_after < steps[i].mse_after:
-                groups[i], steps[i] = g, st
+        late = [i for i in redo if i not in alt_steps]
+        for i in late:
+            alts[i] = typical_start(groups[i], own[i])
+        if late:
+            alt_steps.update(zip(late, linearized_step(ev, tr_ss, fixed, [alts[i] for i in late], first=True, block=True,
+                                                       also=[he_ss])))
+        for i in redo:
+            if alt_steps[i].improved and alt_steps[i].mse_after < steps[i].mse_after:
+                groups[i], steps[i] = alts[i], alt_steps[i]
     return _Screened(list(groups), [st.improved for st in steps], np.array([st.mse_after for st in steps]),
                      np.array([st.also[0].mse[0] if st.improved else b_he.mse[0] for st in steps]),
-                     [st.also[0].sim[0] if st.improved else b_he.sim[0] for st in steps])
+                     [st.also[0].sim[0] if st.improved else b_he.sim[0] for st in steps], [names[i] for i in redo])
 
 
 def _refine(ev, tr_ss, he_ss, fixed, sc: _Screened, names: list[str], cfg: DiagnoseConfig, log) -> None:

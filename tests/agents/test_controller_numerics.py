@@ -277,3 +277,36 @@ def test_the_law_is_one_code_on_both_backends(model64):
     for key, t in out["torch"].items():
         assert np.allclose(np.asarray(t), out["numpy"][key], rtol=1e-9, atol=1e-9), key
     assert np.abs(out["numpy"]["terms.phi"]).max() > 0.5 and np.abs(out["numpy"]["dg"]).max() > 1.0  # not trivially zero
+
+
+def test_a_target_that_moves_at_every_step_gets_one_step_plans_exact_at_the_measured_state():
+    """A command filter moves the tracked target at every physics step, so every plan is replaced
+    after its first step: the plans are then one step long, and a plan's first step is the law at
+    the measured state (model_rate="physics"). A target held for each action gets 8-step plans."""
+    model = ArmModel.from_urdf(source_urdf_path()[0], BASE_LINK, TIP_LINK)
+    npm = model.numpy()
+    b, dt = 3, 1 / 120
+    q0 = np.repeat(np.array([HOME]), b, 0)
+
+    def run(rate: str, target):
+        drv = DroidArmDriver(model, DroidControlConfig(model_rate=rate), b)
+        drv.allow_numpy = False
+        drv.reset(torch.as_tensor(q0, dtype=torch.float32))
+        arm = np.diag(drv.armature.double().numpy())
+        q, qd, res, horizons = q0.copy(), np.zeros_like(q0), [], []
+        for k in range(24):
+            drv.set_target(torch.as_tensor(target(k), dtype=torch.float32))
+            tau = drv.torque(torch.as_tensor(q, dtype=torch.float32), torch.as_tensor(qd, dtype=torch.float32), dt).double().numpy()
+            links = npm.links(npm.link_frames(q))
+            qd = qd + dt * np.linalg.solve(npm.mass_at(links) + arm, (tau - npm.bias_at(links, qd))[..., None])[..., 0]
+            q = q + dt * qd
+            res.append(tau)
+            horizons.append(getattr(drv.rate, "horizon", None))
+        return np.stack(res), horizons
+
+    filtered = lambda k: q0 + 0.1 * (1 - np.exp(-k / 10))  # noqa: E731
+    (path, horizons), (physics, _) = run("path", filtered), run("physics", filtered)
+    assert horizons[0] == 8 and set(horizons[2:]) == {1}, horizons
+    np.testing.assert_allclose(path, physics, rtol=1e-4, atol=1e-3)
+    _, horizons = run("path", lambda k: q0 + 0.02 * (k // 8 + 1))  # held for each 8-step action
+    assert set(horizons) == {8}, horizons

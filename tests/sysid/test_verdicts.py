@@ -135,7 +135,7 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb
             if sus:
                 sus[0].confounded_with = ["smooth_friction"]
             return SimpleNamespace(baseline_heldout_rmse=5.6e-3, noise_floor=1e-4, saturated_fraction=0.0,
-                                   suspects=sus, verdict="partially_explained")
+                                   suspects=sus, verdict="partially_explained", rescreened=[])
 
         def fit_suspect(self, model, suspect, config, log):
             fitted.append(suspect.effect)

@@ -125,7 +125,8 @@ def friction(be, neg_friction, qd, velocity: float, inertia_lower_bound, dt: flo
     return be.clip(neg_friction * be.tanh(qd / velocity), -cap, cap)
 
 
-def plan_path(be, cfg, q, qd, q_t, gains, arm, extra, ext, dt: float, steps: int, predictor=None, eps: float = 1e-3) -> dict:
+def plan_path(be, cfg, q, qd, q_t, gains, arm, extra, ext, dt: float, steps: int, predictor=None, eps: float = 1e-3,
+              correct_gravity: bool = True) -> dict:
     """Model terms for the next ``steps`` physics steps, each at the state the closed loop is
     predicted to reach at that step: one batched evaluation instead of one per step.
 
@@ -133,8 +134,10 @@ def plan_path(be, cfg, q, qd, q_t, gains, arm, extra, ext, dt: float, steps: int
     and the prediction only decides where the terms are taken); the terms along it are then the
     model's own. ``dg`` (dg/dq at q, its 2n configurations in the same batch) corrects gravity to
     first order for the measured q. ``predictor``: (Phi, Kp) from the previous plan at the state it
-    predicted for now (saves a model evaluation). Returns "q", "bias", "mass", "minv", "phi",
-    "kp", "kd" (B, steps, ...) and per row "target", "dg", "k" (the step index)."""
+    predicted for now (saves a model evaluation). ``correct_gravity=False``: no ``dg`` (zeros), for a
+    plan used only at the q it was taken at (its first step, which is exact), where the correction
+    is zero. Returns "q", "bias", "mass", "minv", "phi", "kp", "kd" (B, steps, ...) and per row
+    "target", "dg", "k" (the step index)."""
     (b, n), ticks = q.shape, tick_count(dt, cfg.law_hz)
     if predictor is None:
         t = terms_at(be, cfg, q, qd, gains, arm, extra, dt)
@@ -153,7 +156,8 @@ def plan_path(be, cfg, q, qd, q_t, gains, arm, extra, ext, dt: float, steps: int
     m = b * steps
     qs = q_path.reshape(m, n)
     qds = xs[..., n:].reshape(m, n) if cfg.coriolis_feedforward else be.zeros((m, n), q)
-    if cfg.gravity_compensation:  # dg/dq at q by central differences, in the same batch
+    correct = cfg.gravity_compensation and correct_gravity
+    if correct:  # dg/dq at q by central differences, in the same batch
         d = eps * be.eye(n, q)
         qs = be.cat([qs, (q[:, None] + d).reshape(-1, n), (q[:, None] - d).reshape(-1, n)], 0)
         qds = be.cat([qds, be.zeros((2 * b * n, n), q)], 0)
@@ -168,7 +172,7 @@ def plan_path(be, cfg, q, qd, q_t, gains, arm, extra, ext, dt: float, steps: int
     if cfg.coriolis_feedforward or cfg.gravity_compensation:
         ff = be.bias(kin, qds, cfg.gravity_compensation)
         bias = ff[:m]
-        if cfg.gravity_compensation:
+        if correct:
             dg = be.swap(((ff[m : m + b * n] - ff[m + b * n :]) / (2 * eps)).reshape(b, n, n))
     else:
         bias = be.zeros((m, n), q)

@@ -105,6 +105,8 @@ class PathRate:
     def __init__(self, cfg, extend=None, targets_move: bool = True):
         self.cfg, self.extend = cfg, extend
         self.steps = cfg.path_steps
+        self.horizon = self.steps  # steps of the current plan (1 while the target moves at every step)
+        self._all_moved = False  # every row's target moved at the last step
         self.plan = self.dt = self._r = None
         self.plans = 0  # plans made (full or for some rows): a diagnostic
         # True: the tracked target may change without ``retarget`` (command stages such as latency),
@@ -113,7 +115,7 @@ class PathRate:
         self._retargeted = True
 
     def reset(self) -> None:
-        self.plan = None
+        self.plan, self._all_moved = None, False
 
     def retarget(self) -> None:
         """Rows whose target changed re-plan on their next step (``terms`` compares the targets)."""
@@ -125,14 +127,22 @@ class PathRate:
         if self._r is None or len(self._r) != b:
             self._r = be.arange(b, q)
         r = self._r
-        full, rows, pred = p is None or self.dt != dt, None, None
+        full, rows, pred, moving = p is None or self.dt != dt, None, None, False
         if not full:
-            j = be.at_most(p["k"], steps - 1)
+            j = be.at_most(p["k"], self.horizon - 1)
             if off is None:
                 off = (be.abs(q - p["q"][r, j]) > self.cfg.path_tolerance).any(-1)
-            need = (p["k"] >= steps) | off
+            need = (p["k"] >= self.horizon) | off
+            all_moved = False
             if self.targets_move or self._retargeted:
-                need = need | (q_t != p["target"]).any(-1)
+                moved = (q_t != p["target"]).any(-1)
+                need = need | moved
+                all_moved = bool(moved.all())
+                # every row's target moved at this step and the last: the target moves at every step
+                # (a command filter), each plan is replaced after its first step, and the rest of a
+                # longer one would be evaluated for nothing
+                moving = all_moved and self._all_moved and bool((p["k"] == 1).all())
+            self._all_moved = all_moved
             if need.any():
                 rows = be.rows(need)
                 full = len(rows) == b
@@ -141,6 +151,7 @@ class PathRate:
             self.plans += 1
             extra = extra() if callable(extra) else extra
             if full:
+                self.horizon = 1 if moving else steps
                 self.plan, self.dt = self._make(be, q, qd, q_t, gains, arm, extra, ext, dt, pred), dt
                 p = self.plan
             else:
@@ -155,7 +166,9 @@ class PathRate:
         return PlanStep(p, r, k)
 
     def _make(self, be, q, qd, q_t, gains, arm, extra, ext, dt, pred) -> dict:
-        plan = plan_path(be, self.cfg, q, qd, q_t, gains, arm, extra, ext, dt, self.steps, pred)
+        # a plan cut to one step is used only at the q it was taken at: no gravity correction to prepare
+        plan = plan_path(be, self.cfg, q, qd, q_t, gains, arm, extra, ext, dt, self.horizon, pred,
+                         correct_gravity=self.horizon == self.steps)
         if self.extend is not None:
             self.extend(plan, dt)
         return plan
