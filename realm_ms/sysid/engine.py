@@ -218,18 +218,24 @@ class Evaluator:
             self._sim.show_progress = self.progress
         return self._sim
 
-    def _pool_get(self):
+    def _pool_get(self) -> list:
+        """One single-process executor per worker: chunk k of every batch goes to worker k % workers.
+        A replay arm keeps a trace of what it simulated before (an arm reset after a build-time
+        effect replays ~1e-6 rad off a fresh one), so a shared pool, which hands a chunk to whichever
+        worker is free, made a run's results depend on timing; pinned, a run repeats bit for bit."""
         if self._pool is None:
             import multiprocessing as mp
             from concurrent.futures import ProcessPoolExecutor
 
             ctx = mp.get_context("spawn")
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_worker_init, initargs=(self.config,))
+            self._pool = [ProcessPoolExecutor(1, mp_context=ctx, initializer=_worker_init, initargs=(self.config,))
+                          for _ in range(self.workers)]
         return self._pool
 
     def close(self) -> None:
         if self._pool is not None:
-            self._pool.shutdown(cancel_futures=True)
+            for pool in self._pool:
+                pool.shutdown(cancel_futures=True)
             self._pool = None
 
     def __enter__(self):
@@ -296,7 +302,8 @@ class Evaluator:
             n = int(lengths[rows].max())
             tasks.append((q0[rows], qd0[rows], cmd[rows, :n], specs, None if closed is None else closed.rows(rows)))
         if self.workers > 1 and len(tasks) > 1:
-            parts = list(self._pool_get().map(_worker_run, tasks))
+            pools = self._pool_get()
+            parts = [f.result() for f in [pools[k % len(pools)].submit(_worker_run, t) for k, t in enumerate(tasks)]]
         else:
             from realm_ms.sysid.closed_loop import bind
 

@@ -117,6 +117,23 @@ def test_worker_processes_match_in_process():
     np.testing.assert_allclose(one, two, atol=1e-6)
 
 
+@pytest.mark.slow
+def test_worker_processes_repeat_a_run_bit_for_bit():
+    """Chunk k of every batch goes to the same worker, so a run whose arms carry traces of earlier
+    batches (a build-time effect, then a plain batch) repeats exactly on a fresh evaluator."""
+    q0, cmd = _batch(8)
+
+    def run() -> list[np.ndarray]:
+        fx, fc = make_effect("armature"), make_effect("coulomb_friction")
+        fx.set_theta(np.tile(np.linspace(0, 0.4, 8)[:, None], (1, 7)))
+        fc.set_theta(np.tile(np.linspace(0, 0.3, 8)[:, None], (1, len(fc.params))))
+        with Evaluator(workers=2) as ev:
+            return [ev.rollout(q0, np.zeros_like(q0), cmd, [fx]), ev.rollout(q0, np.zeros_like(q0), cmd, [fc])]
+
+    for a, b in zip(run(), run()):
+        assert np.array_equal(a, b)
+
+
 def test_equal_arms_are_simulated_once_and_then_come_from_the_cache():
     q0, cmd = _batch(3)
     fx = make_effect("coulomb_friction")
