@@ -1,9 +1,12 @@
 """CPU seconds of ``python -m realm_ms.lerobot.train`` (the small ACT of
-``tests/lerobot/test_policy_transfer.py``, one thread) with glibc's malloc at
-its defaults (``REALM_KEEP_FREED_MEMORY=0``, the baseline) and keeping freed memory (the default),
-in the same run: user and system time of each, and their ratio.
+``tests/lerobot/test_policy_transfer.py``, one thread) with one of its changes to LeRobot's trainer
+off (the baseline) and on (the default), in the same run: user and system time of each, and their ratio.
 
-    .venv/bin/python bench/train_step.py --root DATASET [--steps 150] [--batch-size 8]
+    .venv/bin/python bench/train_step.py --root DATASET [--steps 150] [--batch-size 8] [--switch freed-memory|fused-adam]
+
+``freed-memory``: glibc's malloc at its defaults (``REALM_KEEP_FREED_MEMORY=0``) against keeping the
+memory a step frees; ``fused-adam``: LeRobot's Adam build (``REALM_FUSED_ADAM=0``) against torch's
+fused kernel.
 
 DATASET: a LeRobot dataset `realm export` wrote (e.g. ``realm export --tasks REALM-PushSwitch-v1
 --episodes 1 --width 32 --height 24 --out DATASET``).
@@ -21,7 +24,10 @@ import time
 from pathlib import Path
 
 
-def train(root: Path, steps: int, batch: int, keep: bool) -> tuple[float, float, float]:
+SWITCHES = {"freed-memory": "REALM_KEEP_FREED_MEMORY", "fused-adam": "REALM_FUSED_ADAM"}
+
+
+def train(root: Path, steps: int, batch: int, switch: str, on: bool) -> tuple[float, float, float]:
     """(wall, user, system) seconds of one training run."""
     with tempfile.TemporaryDirectory() as out:
         cmd = [sys.executable, "-m", "realm_ms.lerobot.train", f"--dataset.repo_id=realm/{root.name}", f"--dataset.root={root}",
@@ -32,7 +38,7 @@ def train(root: Path, steps: int, batch: int, keep: bool) -> tuple[float, float,
                "--policy.optimizer_lr=5e-4", "--policy.optimizer_lr_backbone=5e-4", f"--steps={steps}",
                f"--batch_size={batch}", "--num_workers=0", f"--save_freq={steps}", "--log_freq=50",
                f"--output_dir={Path(out) / 'run'}", "--wandb.enable=false"]
-        env = dict(os.environ, OMP_NUM_THREADS="1", REALM_KEEP_FREED_MEMORY="1" if keep else "0")
+        env = dict(os.environ, OMP_NUM_THREADS="1", **{SWITCHES[switch]: "1" if on else "0"})
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t = time.perf_counter()
         subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -46,14 +52,15 @@ def main(argv=None) -> int:
     ap.add_argument("--root", type=Path, required=True)
     ap.add_argument("--steps", type=int, default=150)
     ap.add_argument("--batch-size", type=int, default=8)
+    ap.add_argument("--switch", choices=sorted(SWITCHES), default="freed-memory")
     a = ap.parse_args(argv)
-    rows = {"malloc defaults": train(a.root, a.steps, a.batch_size, keep=False),
-            "freed memory kept": train(a.root, a.steps, a.batch_size, keep=True)}
+    rows = {f"{a.switch} off": train(a.root, a.steps, a.batch_size, a.switch, on=False),
+            f"{a.switch} on": train(a.root, a.steps, a.batch_size, a.switch, on=True)}
     print(f"{a.steps} steps of batch {a.batch_size}, one thread:")
     for name, (wall, user, sys_) in rows.items():
         print(f"  {name:18s} wall {wall:6.1f} s   user {user:6.1f} s   system {sys_:5.1f} s")
     (w0, u0, s0), (w1, u1, s1) = rows.values()
-    print(f"CPU (user + system) defaults / kept = {(u0 + s0) / (u1 + s1):.2f}x; wall {w0 / w1:.2f}x")
+    print(f"CPU (user + system) off / on = {(u0 + s0) / (u1 + s1):.2f}x; wall {w0 / w1:.2f}x")
     return 0
 
 

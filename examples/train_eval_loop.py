@@ -20,6 +20,8 @@ Stages (each resumes: rerunning the same command skips finished work):
               final table (success with Wilson intervals, fine-tuning delta with Newcombe's interval)
               on stdout and in `summary.json`.
 
+`realm eval` runs in this process (``realm()``: the installed command's own ``main``), so the imports
+and the renderer's set-up are paid once; exports and training are child processes.
 `--quick` is the CI variant: every stage with a handful of steps (no success expected).
 """
 
@@ -282,13 +284,34 @@ def plot_curves(curves: dict[str, list[dict]], validation: dict[str, list[dict]]
 # ---------------------------------------------------------------- evaluation
 
 
+def realm(argv: list[str], quiet: bool = False) -> int:
+    """The ``realm`` command with ``argv``, run in this process: the same parser and code as the installed
+    script, while the imports and the renderer (whose first picture costs seconds on a CPU) are paid
+    once for every evaluation of the recipe instead of once per command."""
+    import contextlib
+    import io
+
+    from realm_ms.cli import main as realm_main
+
+    with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
+        return realm_main(argv)
+
+
 def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episodes: int, seed: int = 0) -> Path:
-    cmd = realm_command() + [
+    """`realm eval` of the checkpoint into ``run`` (resumes it); the policy on one torch thread, as the
+    env processes beside it run on the other cores."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        rc = realm([
         "eval", "--policy", f"lerobot:{ckpt}", "--tasks", *r.tasks, "--perturbations", *perturbations,
         "--episodes", str(episodes), "--seed", str(seed), "--max-steps", str(r.eval_max_steps),
         "--replan-every", str(r.replan_every), "--workers", str(r.workers), "--camera-size", f"{r.width}x{r.height}",
-        "--device", r.device, "--out", str(run)]
-    rc = subprocess.run(cmd, cwd=ROOT, env=child_env()).returncode
+        "--device", r.device, "--out", str(run)])
+    finally:
+        torch.set_num_threads(threads)
     if rc != 0:
         raise SystemExit(f"realm eval into {run} failed (exit {rc})")
     return run
@@ -481,8 +504,8 @@ def main(argv=None) -> int:
         f.writelines(f"{n},{x['step']},{x['loss']},{x['l1_loss']}\n" for n, rows in curves.items() for x in rows)
     plot_curves(curves, {"train (Default)": val, f"finetune (Default + {worst})": ft_val}, out / "learning_curve.png")
     for run in (default, table, base_worst, tuned):
-        subprocess.run(realm_command() + ["eval", "report", str(run)], cwd=ROOT, env=child_env(), check=True,
-                       stdout=subprocess.DEVNULL)
+        if realm(["eval", "report", str(run)], quiet=True) != 0:
+            raise SystemExit(f"realm eval report {run} failed")
     index = out / "report.html"
     # both policies side by side (the base policy's Default and worst-perturbation runs, the fine-tuned one)
     from realm_ms.eval.report import write_index

@@ -6,7 +6,8 @@ with LeRobot's `lerobot-train` (run through `realm_ms.lerobot.train`, which deco
 600 steps of batch 8 end ~0.06 rad from the demo, half the check's margin), and the checkpoint is
 run from the demo's seed:
 
-- through `realm export --policy lerobot:CKPT` (the `lerobot:` policy of `realm eval`): the joint
+- through `realm export --policy lerobot:CKPT` (the `lerobot:` policy of `realm eval`; the exports run
+  in the test's process, the training in a child): the joint
   trajectory replays the demo's and the gripper closes as in the demo (a joint-order or gripper-
   convention error makes either fail);
 - through LeRobot's own `lerobot-eval --env.type=realm`: same features as the export and the episode
@@ -36,8 +37,13 @@ def _run(cmd: list[str]) -> None:
 
 
 def _export(out: Path, *extra: str, max_steps: int = 120) -> None:
-    _run([str(BIN / "realm"), "export", "--tasks", TASK, "--episodes", "1", "--seed", str(SEED), "--width", str(W),
-          "--height", str(H), "--max-steps", str(max_steps), "--out", str(out), "--repo-id", f"realm/{out.name}", *extra])
+    """`realm export` in this process (the recipe's test runs the installed script): the test
+    worker's renderer and imports serve both exports."""
+    from realm_ms.cli import main
+
+    assert main(["export", "--tasks", TASK, "--episodes", "1", "--seed", str(SEED), "--width", str(W), "--height", str(H),
+                 "--max-steps", str(max_steps), "--out", str(out), "--repo-id", f"realm/{out.name}", "--no-progress",
+                 *extra]) == 0
 
 
 def _episode(root: Path) -> tuple[np.ndarray, np.ndarray, dict]:
