@@ -8,7 +8,6 @@ crashed or interrupted build resumes where it stopped and an unchanged re-run on
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 from collections import Counter
@@ -20,6 +19,7 @@ from asset_pipeline.config import BuildConfig
 from asset_pipeline.process import Outcome, process_item
 from asset_pipeline.record import CATALOG_FILE, FAILURES_FILE
 from asset_pipeline.sources import DEFAULT_SOURCES, SOURCES, SourceItem
+from realm_ms.atomic import write_text
 
 
 class SourceUnavailable(Exception):
@@ -225,11 +225,7 @@ def _write_catalog(out: Path, records: dict[str, dict], failed: set[str], failur
     for oid, d in records.items():
         d = {k: v for k, v in d.items() if not k.startswith("_")}
         merged[oid] = d
-    tmp = cat.with_suffix(".tmp")
-    with open(tmp, "w") as f:
-        for oid in sorted(merged):
-            f.write(json.dumps(merged[oid], separators=(",", ":")) + "\n")
-    os.replace(tmp, cat)
+    write_text(cat, "".join(json.dumps(merged[oid], separators=(",", ":")) + "\n" for oid in sorted(merged)))
     with open(out / FAILURES_FILE, "w") as f:
         for d in sorted(failures, key=lambda d: d["id"]):
             f.write(json.dumps(d) + "\n")

@@ -14,9 +14,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from realm_ms.task_index import DEFAULT
+
 DEFAULT_OUT = Path("outputs/demo")
 DEMO_TASKS = ("REALM-PickApple-v1", "REALM-PushSwitch-v1")
-DEMO_PERTURBATIONS = ("Default", "V-AUG", "VB-POSE")
+DEMO_PERTURBATIONS = (DEFAULT, "V-AUG", "VB-POSE")
 
 
 def add_parser(sub) -> None:
@@ -26,7 +28,8 @@ def add_parser(sub) -> None:
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output directory (default {DEFAULT_OUT})")
     p.add_argument("--tasks", nargs="+", default=list(DEMO_TASKS), help=f"env ids (default {' '.join(DEMO_TASKS)})")
     p.add_argument("--perturbations", nargs="+", default=list(DEMO_PERTURBATIONS),
-                   help="perturbation names; ones not registered in this checkout are skipped (default Default V-AUG VB-POSE)")
+                   help="perturbation names; ones not registered in this checkout are skipped "
+                   f"(default {' '.join(DEMO_PERTURBATIONS)})")
     p.add_argument("--episodes", type=integer(1), default=1, help="episodes per (task, perturbation), >= 1 (default 1)")
     p.add_argument("--max-steps", type=integer(1), default=200, help="control steps per expert episode (default 200; REALM: 800)")
     p.add_argument("--workers", type=integer(1), default=None, help="worker processes (default: CPU cores)")
@@ -55,7 +58,7 @@ def run(args) -> int:
             continue
         if c in avail:
             perts.append(c)
-    perts = perts or ["Default"]
+    perts = perts or [DEFAULT]
     args.out.mkdir(parents=True, exist_ok=True)
     proto = PRESETS["quick"].with_overrides(episodes=args.episodes, max_steps=args.max_steps)
     print(f"realm demo: {len(args.tasks)} task(s) x {', '.join(perts)} x {args.episodes} episode(s)")

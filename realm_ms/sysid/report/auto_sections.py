@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from realm_ms.html_kit import esc, table
+from realm_ms.sysid.diagnose import DiagnoseConfig
 from realm_ms.sysid.report.figures import new, to_img
 from realm_ms.sysid.report.sections import JOINTS, ReportData
 
@@ -18,19 +19,21 @@ def auto_waterfall(d: ReportData):
     labels = ["nominal"] + [f"+ {s['effect']}" for s in a["steps"]]
     vals = np.array([a["nominal_heldout_rmse"]] + [s["heldout_rmse"] for s in a["steps"]])
     fin = a["final"]
-    floor = (a.get("details") or {}).get("judging_floor", fin["noise_floor"])
+    details = a.get("details") or {}
+    floor = details.get("judging_floor", fin["noise_floor"])
+    factor = details.get("found_factor", DiagnoseConfig.found_factor)  # absent from older auto JSON
     fig, ax = new(1, 1, 9, 3.2)
     x = ax[0, 0]
     x.bar(range(len(vals)), vals * scale, color=["tab:red"] + ["tab:blue"] * (len(vals) - 1))
     x.axhline(fin["noise_floor"] * scale, color="k", ls="--", lw=1, label="noise floor")
-    x.axhline(1.5 * floor * scale, color="tab:green", ls=":", lw=1, label="1.5x judging floor")
+    x.axhline(factor * floor * scale, color="tab:green", ls=":", lw=1, label=f"{factor:g}x judging floor")
     x.set_xticks(range(len(vals)), labels, rotation=20, fontsize=8)
     x.set_ylabel(f"held-out RMSE [{shown}]")
     x.legend(fontsize=8)
     rows = [[lab, f"{v:.3e}", _ratio(v, floor)] for lab, v in zip(labels, vals)]
-    for r in (a.get("details") or {}).get("rejected", []):
+    for r in details.get("rejected", []):
         rows.append([f"(rejected) {r['effect']}", f"{r['heldout_rmse']:.3e}", _ratio(r['heldout_rmse'], floor)])
-    msg = (a.get("details") or {}).get("message", "")
+    msg = details.get("message", "")
     head = f"<p>verdict <b>{esc(fin['verdict'])}</b>. {esc(msg)}</p>"
     return ("Auto: nominal → + effect → …", head + to_img(fig, "auto waterfall")
             + table(["model", f"held-out RMSE [{unit}]", "/ judging floor"], rows))
