@@ -343,3 +343,6 @@ def test_plans_skip_tried_keys_and_replay_recorded_draws():
     assert [(q.policy, q.replan_every, q.max_steps) for q in plans] == [("expert", 8, 9), ("zero", 4, 9)]
     assert plans[0].keys == [EpisodeKey("B", "V-AUG", 1), EpisodeKey("A", "Default", 2)] and plans[0].want is None
     assert plans[0].replay == {EpisodeKey("B", "V-AUG", 1): draws} and plans[1].keys == [EpisodeKey("A", "Default", 1)]
+    from realm_ms.eval.records import robot_model_of
+
+    assert robot_model_of(records[0]) is None  # a record without an env config predates --robot-model: nominal
