@@ -29,6 +29,13 @@ def key_of(rec: dict) -> EpisodeKey:
     return EpisodeKey(rec["task"], rec["perturbation"], int(rec["seed"]))
 
 
+def robot_model_of(rec: dict) -> str | dict | None:
+    """The robot model a record's episode ran: its env config's ``robot_model`` (a named model, a
+    MODEL.yaml path as given, or an inline dict; None = the nominal robot). Records written before
+    ``realm eval --robot-model`` existed name none (or carry no config): they ran the nominal robot, None."""
+    return (rec.get("config") or {}).get("robot_model")
+
+
 def _complete(raw: bytes) -> bool:
     """``raw`` is one whole JSON value (a last line written without its newline, not a cut one)."""
     try:

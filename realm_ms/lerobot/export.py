@@ -9,7 +9,7 @@ with each finished episode, through ``LeRobotDataset.create`` / ``add_frame`` / 
 (e.g. a policy's bad reply) or whose cell is unsupported is reported and not written.
 
 Per-episode metadata LeRobot's schema has no place for (task id, perturbation and its drawn
-parameters, seed, policy, best progression, success, kept or not) goes to
+parameters, seed, policy, robot model, best progression, success, kept or not) goes to
 ``meta/realm_episodes.jsonl``, one JSON line per attempted episode. That file is also the resume
 state: every ``commit_every`` episodes the dataset is finalized (parquet footers written) and
 re-opened with ``LeRobotDataset.resume``, so an interrupted export keeps every committed episode
@@ -107,6 +107,7 @@ class EpisodeRecord:
     params: list | None = None  # the drawn perturbation parameters per sub-env (info["perturbation"]["params"])
     config: dict | None = None  # the env's RealmEnvConfig.to_dict(): RealmEnvConfig.from_dict re-creates it
     gripper_labels: str = "command"  # convention of action[7] (ExportConfig.gripper_labels)
+    robot_model: str = "nominal"  # the robot the episode ran, named as realm eval's records name it
 
 
 # Hugging Face Hub repo ids: OWNER/NAME, letters, digits, '-', '_', '.'; no '--' or '..'; <= 96 chars
@@ -333,12 +334,41 @@ def gripper_label(action, labels: str):
     return a
 
 
+def _robots(recs: list[dict]) -> list:
+    """The distinct robot models the records ran (``records.robot_model_of``; None = nominal), in order."""
+    from realm_ms.eval.records import robot_model_of
+
+    return list({json.dumps(m, sort_keys=True): m for m in map(robot_model_of, recs)}.values())
+
+
+def same_robot(a, b) -> bool:
+    """Two robot model values (a name, a MODEL.yaml path, an inline dict; None = nominal) are the same
+    robot: equal, or equal once loaded (``droid-aligned`` and the path of its file)."""
+    if a == b:
+        return True
+    if a is None or b is None:
+        return False
+    from realm_ms.agents.robot_model import load_robot_model
+
+    try:
+        return load_robot_model(a).to_dict() == load_robot_model(b).to_dict()
+    except (ValueError, FileNotFoundError):
+        return False
+
+
 def _open(cfg: ExportConfig) -> tuple[_Writer, list[dict]]:
+    from realm_ms.eval.runner import robot_model_name
+
     recs = read_sidecar(cfg.out)
-    other = sorted({r.get("gripper_labels", "command") for r in recs if r["kept"]} - {cfg.gripper_labels})
+    kept = [r for r in recs if r["kept"]]
+    other = sorted({r.get("gripper_labels", "command") for r in kept} - {cfg.gripper_labels})
     if other:
         raise ExportError(f"{cfg.out} holds episodes with --gripper-labels {other[0]}; resume with the same "
                           f"--gripper-labels or export to a new --out")
+    others = [m for m in _robots(kept) if not same_robot(m, cfg.robot_model)]
+    if others:  # the card names one robot; resume is keyed without it
+        raise ExportError(f"{cfg.out} holds episodes of robot model {robot_model_name(others[0])}, not "
+                          f"{robot_model_name(cfg.robot_model)}; export to a new --out")
     writer = _Writer(cfg)
     # episodes whose sidecar line was written but whose save/commit never completed are forgotten
     done = [r for r in recs if not r["kept"] or (r["episode_index"] is not None and r["episode_index"] < writer.num_episodes)]
@@ -402,7 +432,7 @@ def _run_plan(cfg: ExportConfig, writer: _Writer, p: Plan, summary: dict) -> Non
                 writer.add(frame)
             er = EpisodeRecord(key.task, key.perturbation, key.seed, p.policy, rec["instruction"], rec["steps"], hooked["best"],
                                rec["success"], keep, writer.num_episodes if keep else None, rec["perturbation_params"].get("params"),
-                               rec["config"], cfg.gripper_labels)
+                               rec["config"], cfg.gripper_labels, rec["robot_model"])
             _append_sidecar(writer.root, er)  # before the save: a crash mid-save is filtered on resume
             if keep:
                 writer.save()
@@ -457,8 +487,12 @@ def export_dataset(cfg: ExportConfig) -> dict:
 
 def export_eval_run(run_dir: Path, cfg: ExportConfig) -> dict:
     """Export the episodes of a ``realm eval`` run, re-simulated from its ``records.jsonl``: same task,
-    perturbation, recorded perturbation draws, seed, policy spec and re-planning interval (faithful
-    for deterministic policies: the scripted expert, LeRobot policies without sampling)."""
+    perturbation, recorded perturbation draws, seed, policy spec, re-planning interval and robot model
+    (faithful for deterministic policies: the scripted expert, LeRobot policies without sampling).
+
+    The robot is the one the records name (``records.robot_model_of``: records older than
+    ``--robot-model`` ran the nominal robot); ``cfg.robot_model`` may only name that same robot.
+    Records of several robots are refused: a dataset holds one robot."""
     from realm_ms.eval.records import read_records
 
     check_out(cfg)
@@ -471,14 +505,42 @@ def export_eval_run(run_dir: Path, cfg: ExportConfig) -> dict:
     cfg.tasks = sorted({r["task"] for r in records})
     validate_tasks(cfg.tasks, sorted({r["perturbation"] for r in records}))
     cfg.policy = ",".join(sorted({r["policy"] for r in records}))
+    cfg.robot_model = _run_robot(path, records, cfg.robot_model)
     writer, done = _open(cfg)
     return _run(cfg, writer, done, plan_from_records(records, done, cfg.max_steps))
 
 
+def _run_robot(path: Path, records: list[dict], flag):
+    """The one robot model of a run's records, which loads here; ``flag`` (``--robot-model``) may only repeat it."""
+    from realm_ms.agents.robot_model import load_robot_model
+    from realm_ms.eval.runner import robot_model_name
+
+    robots = _robots(records)
+    if len(robots) > 1:
+        raise ExportError(f"{path}: its records ran {len(robots)} robot models ({', '.join(map(robot_model_name, robots))}) and a "
+                          "dataset holds one; split records.jsonl by robot_model and export each file (--from-eval FILE) to its own --out")
+    (robot,) = robots
+    if flag is not None and not same_robot(flag, robot):
+        raise ExportError(f"--robot-model {robot_model_name(flag)} contradicts {path}, whose episodes ran robot model "
+                          f"{robot_model_name(robot)}; drop --robot-model: --from-eval re-simulates on the run's robot")
+    try:
+        load_robot_model(robot)
+    except (ValueError, FileNotFoundError) as e:
+        raise ExportError(f"{path}: the run's robot model {robot_model_name(robot)} does not load here ({e}); "
+                          "run the export where the eval ran (a relative MODEL.yaml path is read from there)") from None
+    return robot
+
+
 def write_card(cfg: ExportConfig, root: Path) -> Path:
-    """``README.md`` in the dataset root: LeRobot's card template filled with what this dataset holds."""
+    """``README.md`` in the dataset root: LeRobot's card template filled with what this dataset holds,
+    the robot model it ran and the credits its CC-BY 4.0 licence asks to keep (the robot model's
+    provenance credit, the scanned object meshes')."""
     from lerobot.datasets.dataset_metadata import LeRobotDatasetMetadata
     from lerobot.datasets.utils import create_lerobot_dataset_card
+
+    from realm_ms.agents.robot_model import load_robot_model
+    from realm_ms.assets.real_objects import REAL_OBJECTS
+    from realm_ms.eval.runner import robot_model_name
 
     meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
     recs = read_sidecar(root)
@@ -490,9 +552,19 @@ def write_card(cfg: ExportConfig, root: Path) -> Path:
         rows[k] = (n + 1, s + int(r["success"]), p + float(r["progression"]))
     table = ["| task | perturbation | episodes | success | mean progression |", "|---|---|---|---|---|"]
     table += [f"| {t} | {p} | {n} | {s}/{n} | {pr / n:.2f} |" for (t, p), (n, s, pr) in sorted(rows.items())]
+    robot = robot_model_name(cfg.robot_model)
+    credit = load_robot_model(cfg.robot_model).provenance.get("credit") if cfg.robot_model is not None else None
+    credits = [f"- robot model `{robot}`: {credit}."] if credit else []
+    meshes: dict[str, list[str]] = {}
+    for o in REAL_OBJECTS.values():
+        if o.licence == "CC-BY-4.0":
+            meshes.setdefault(o.credit, []).append(o.name)
+    credits += [f"- object meshes in the scenes ({', '.join(names)}): {source}, CC-BY 4.0." for source, names in meshes.items()]
     description = "\n".join([
         "REALM generalization-benchmark episodes (realm-ms: ManiSkill3/SAPIEN, DROID Panda + Robotiq 2F-85,",
         f"15 Hz `droid_joint_pos` absolute joint-position control), written by `realm export` with policy `{cfg.policy}`.",
+        f"Robot model: `{robot}`" + (" (the DROID robot as REALM builds it)." if cfg.robot_model is None
+                                     else f" (`--robot-model`; each episode's env config in `{SIDECAR}` names it)."),
         "",
         "DROID feature names: `observation.images.{exterior_1_left, exterior_2_left, wrist_left}` "
         f"({cfg.width}x{cfg.height} video, {FPS} fps), `observation.state` (7 joint positions + gripper position in [0, 1]), "
@@ -500,16 +572,20 @@ def write_card(cfg: ExportConfig, root: Path) -> Path:
         + ("; binary: 1 wherever the policy closed the gripper at all" if cfg.gripper_labels == "binary" else "")
         + "); the language "
         "instruction is the LeRobot task. Extras: `progression` and `success` after the frame's action, `next.done`.",
-        "Per-episode metadata (env id, perturbation and its parameters, seed, policy, success, kept): "
+        "Per-episode metadata (env id, perturbation and its parameters, seed, policy, robot model, success, kept): "
         f"`{SIDECAR}`. Failed episodes are {'dropped' if cfg.success_only else 'kept'}.",
         "",
         *table,
         "",
         "Evaluate a policy trained on it in the same envs with `lerobot-eval --env.type=realm --env.task=<env id>` "
         "(the `lerobot_env_realm` plugin of realm-ms) or `realm eval`.",
+        "",
+        "Licence CC-BY 4.0 (https://creativecommons.org/licenses/by/4.0/): the episodes are made with CC-BY 4.0 "
+        "material; reuse keeps these credits:",
+        *credits,
     ])
     card = create_lerobot_dataset_card(
-        tags=["REALM", "realm-ms", "DROID", "ManiSkill3", "simulation"], dataset_info=meta.info, license="mit",
+        tags=["REALM", "realm-ms", "DROID", "ManiSkill3", "simulation"], dataset_info=meta.info, license="cc-by-4.0",
         repo_id=cfg.repo_id, dataset_description=description,
     )
     path = root / "README.md"

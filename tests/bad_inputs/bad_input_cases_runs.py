@@ -91,6 +91,10 @@ def make_files(root: Path) -> None:
     _write_records(d / "records.jsonl", [{k: v for k, v in x.items() if k != "fingerprint"} for x in ok])
     d = _copy_run(root, "run_half_legacy")
     _write_records(d / "records.jsonl", ok + [{k: v for k, v in dict(ok[0], seed=1236).items() if k != "fingerprint"}])
+    # a record of another robot copied in (export --from-eval: a dataset holds one robot)
+    d = _copy_run(root, "run_two_robots", drop=("run.json",))
+    aligned = dict(ok[1], robot_model="droid-aligned", config=dict(ok[1]["config"], robot_model="droid-aligned"))
+    _write_records(d / "records.jsonl", [ok[0], aligned])
     # damaged run.json
     for name, data in (("run_json_corrupt", b'{"policy": "zero", '), ("run_json_list", b"[1, 2, 3]"),
                        ("run_json_binary", bytes(range(128, 256)))):
@@ -417,6 +421,10 @@ CASES: list[Case] = [
     cli("export-from-eval-missing", "export --from-eval {root}/no_such_run --out {root}/ex0", r"--from-eval: .*no_such_run.* does not exist"),
     cli("export-from-eval-with-episodes", "export --from-eval {root}/run_ok --episodes 2 --out {root}/ex0", r"--from-eval exports one episode per record.*drop --episodes"),
     cli("export-from-eval-only-garbage", "export --from-eval {root}/run_only_garbage --out {root}/ex0", r"no realm eval records found"),
+    cli("export-from-eval-two-robots", "export --from-eval {root}/run_two_robots --out {root}/ex0",
+        r"run_two_robots/records\.jsonl: its records ran 2 robot models \(nominal, droid-aligned\).*split records\.jsonl by robot_model"),
+    cli("export-from-eval-robot-contradicts", "export --from-eval {root}/run_ok --robot-model droid-aligned --out {root}/ex0",
+        r"--robot-model droid-aligned contradicts .*run_ok.*ran robot model nominal; drop --robot-model"),
     cli("export-tasks-all-and-more", f"export --tasks all {TASK} --episodes 1 --out {{root}}/ex0", r"--tasks all stands alone"),
     cli("export-unknown-task", "export --tasks REALM-Nope-v1 --episodes 1 --out {root}/ex0", r"unknown task\(s\) \['REALM-Nope-v1'\]"),
     Case("export-default-repo-id-from-odd-dir-name", call=_export_config(out="{root}/my demos!!v2"), check=_check_repo_default,

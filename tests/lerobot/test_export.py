@@ -149,6 +149,84 @@ def test_export_of_a_realm_eval_run_resimulates_its_records(tmp_path):
     assert ds.num_episodes == len(records) and ds.num_frames == sum(r["steps"] for r in records)
 
 
+@pytest.fixture(scope="module")
+def aligned(tmp_path_factory):
+    """`realm export --robot-model droid-aligned`: the `exported` fixture's first PushSwitch episode
+    (seed 3, STEPS steps) on the aligned robot."""
+    from realm_ms.cli import main
+
+    out = tmp_path_factory.mktemp("aligned") / "aligned"
+    assert main(["export", "--robot-model", "droid-aligned", "--tasks", TASKS[1], "--episodes", "1", "--seed", "3", "--max-steps", str(STEPS),
+                 "--width", "32", "--height", "24", "--no-progress", "--out", str(out)]) == 0
+    return out
+
+
+def _states(root, repo_id):
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    data = LeRobotDataset(repo_id, root=root, video_backend="pyav").hf_dataset.with_format("numpy")
+    return np.asarray(data["episode_index"]), np.stack(data["observation.state"])
+
+
+def test_export_on_droid_aligned_records_the_robot_and_its_credit(aligned, exported, capsys):
+    """`--robot-model droid-aligned`: the sidecar and the card name the robot, the card keeps DROID's
+    credit under a CC-BY 4.0 licence, the states are not the nominal robot's, and a resume on
+    another robot is refused."""
+    from realm_ms.agents.robot_model import load_robot_model
+    from realm_ms.cli import main
+    from realm_ms.lerobot.export import read_sidecar
+
+    (rec,) = read_sidecar(aligned)
+    assert rec["robot_model"] == rec["config"]["robot_model"] == "droid-aligned"
+    card = (aligned / "README.md").read_text()
+    assert "Robot model: `droid-aligned`" in card and load_robot_model("droid-aligned").provenance["credit"] in card
+    assert "license: cc-by-4.0" in card and "YCB object set" in card
+    cfg, _ = exported
+    nominal_card = (cfg.out / "README.md").read_text()
+    assert "Robot model: `nominal`" in nominal_card and "Khazatsky" not in nominal_card and "license: cc-by-4.0" in nominal_card
+    assert read_sidecar(cfg.out)[0]["robot_model"] == "nominal"
+    mine = _states(aligned, "realm/aligned")[1]
+    episode, states = _states(cfg.out, cfg.repo_id)
+    nominal = states[episode == EPISODES]  # PushSwitch seed 3
+    assert mine.shape == nominal.shape and np.abs(mine - nominal).max() > 1e-3  # the aligned robot lags its commands
+    capsys.readouterr()
+    assert main(["export", "--tasks", TASKS[1], "--episodes", "1", "--seed", "3", "--max-steps", str(STEPS), "--width", "32",
+                 "--height", "24", "--no-progress", "--out", str(aligned)]) == 2
+    assert "holds episodes of robot model droid-aligned, not nominal" in capsys.readouterr().err
+
+
+def test_from_eval_re_simulates_on_the_runs_robot_model(aligned, tmp_path, capsys):
+    """`realm export --from-eval RUN` of a droid-aligned run, without --robot-model: the episode runs on
+    droid-aligned (the states of a `--robot-model droid-aligned` export); a --robot-model naming
+    another robot is one line, exit 2; the same robot named by its file is no contradiction."""
+    from realm_ms.agents.robot_model import load_robot_model, named_model_path
+    from realm_ms.cli import main
+    from realm_ms.lerobot.export import read_sidecar, same_robot
+
+    run, out = tmp_path / "run", tmp_path / "from_eval"
+    assert main(["eval", "--policy", "expert", "--tasks", TASKS[1], "--perturbations", "Default", "--episodes", "1", "--seed", "3",
+                 "--max-steps", str(STEPS), "--robot-model", "droid-aligned", "--workers", "1", "--no-progress", "--no-quality",
+                 "--out", str(run)]) == 0
+    (ran,) = [json.loads(line) for line in (run / "records.jsonl").read_text().splitlines() if line.strip()]
+    assert main(["export", "--from-eval", str(run), "--out", str(out), "--width", "32", "--height", "24", "--no-progress"]) == 0
+    (rec,) = read_sidecar(out)
+    assert rec["robot_model"] == rec["config"]["robot_model"] == ran["robot_model"] == "droid-aligned"
+    assert (rec["steps"], rec["success"]) == (ran["steps"], ran["success"]) and abs(rec["progression"] - ran["progression"]) < 1e-6
+    np.testing.assert_array_equal(_states(out, "realm/from_eval")[1], _states(aligned, "realm/aligned")[1])
+    assert "Robot model: `droid-aligned`" in (out / "README.md").read_text()
+
+    other = load_robot_model("droid-aligned")
+    other.effect("target_filter").set_values({"tau": 0.05})
+    other.save(tmp_path / "other.yaml")
+    capsys.readouterr()
+    assert main(["export", "--from-eval", str(run), "--robot-model", str(tmp_path / "other.yaml"), "--out", str(tmp_path / "x")]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and "contradicts" in err[0] and "ran robot model droid-aligned" in err[0] and "drop --robot-model" in err[0]
+    assert not (tmp_path / "x").exists()
+    assert same_robot("droid-aligned", str(named_model_path("droid-aligned"))) and not same_robot(None, "droid-aligned")
+    assert not same_robot("droid-aligned", str(tmp_path / "other.yaml"))
+
+
 def test_binary_gripper_labels_keep_the_episode_and_binarise_the_grasp(tmp_path, capsys):
     """``--gripper-labels binary``: the same episode (states, joint targets) as the commands export,
     with action[7] = 1 exactly where the expert's gentle pinch commanded any closing (0.03 ... 0.3);
@@ -265,3 +343,6 @@ def test_plans_skip_tried_keys_and_replay_recorded_draws():
     assert [(q.policy, q.replan_every, q.max_steps) for q in plans] == [("expert", 8, 9), ("zero", 4, 9)]
     assert plans[0].keys == [EpisodeKey("B", "V-AUG", 1), EpisodeKey("A", "Default", 2)] and plans[0].want is None
     assert plans[0].replay == {EpisodeKey("B", "V-AUG", 1): draws} and plans[1].keys == [EpisodeKey("A", "Default", 1)]
+    from realm_ms.eval.records import robot_model_of
+
+    assert robot_model_of(records[0]) is None  # a record without an env config predates --robot-model: nominal
