@@ -43,10 +43,11 @@ GRASP_MAX = 0.95  # below it they stopped on something
 GRASP_STILL = 0.01  # per step
 STALL_GAP_M = 0.04
 STALL_SPEED_M_S = 0.01
-#: smallest singular value of the flange Jacobian below which a posture is near-singular; near the
-#: damping scale of DROID's IK (sqrt 1e-2 = 0.1: its least squares passes s^2 / (s^2 + 1e-2) of a step
-#: along that direction, 59 % at 0.12); set on the real episodes (``bench/droid_singularity.py``)
-SINGULAR_SIGMA = 0.12
+#: smallest singular value of the flange Jacobian below which a posture is near-singular: the damping
+#: scale of DROID's IK (sqrt of its 1e-2 regularisation), where its least squares passes half of a step
+#: along the weak direction and its answer is most sensitive to the command (gain s / (s^2 + 1e-2) peaks);
+#: checked on the real episodes (``bench/droid_singularity.py``, ``docs/results.md``)
+SINGULAR_SIGMA = 0.1
 IK_MODES = ("rebuild", "closed_loop")  # command modes whose joint target comes from DROID's IK
 MIN_S = 0.3  # s a signature must hold (5 steps at DROID's 15 Hz)
 PAD_S = 0.2
