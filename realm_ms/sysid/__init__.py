@@ -23,7 +23,7 @@ Module map (small modules, one job each)::
     timeseries.py      Trajectory, validation, seeded split;  data_io.py: npz + LeRobot v3.0
     droid_formats.py   DROID logs (npz, json, csv, h5, LeRobot) and their commands
     closed_loop.py     DROID commands converted at the simulated state inside a rollout
-    interaction.py     grasps and stalls an arm-only replay does not score; saturation.py: torque-saturated bursts
+    interaction.py     grasps, stalls, near-singular IK targets a replay does not score; saturation.py: torque-saturated bursts
     locked_urdf.py     locked-gripper replay URDF;  simulator.py: PhysX CPU batch replay
     gpu.py             physx_cuda batch replay;  engine.py: make_simulator, chunking, worker processes
     replay.py          multiple-shooting segments, sampling at data timestamps, scores

@@ -9,7 +9,8 @@ on the sysid replay simulator: the benchmark's controller, robot and effects (``
 Metrics, the simulated arm beside the real one (flange = ``panda_link8``, forward kinematics of q):
 
 - ``flange_mm``: median over the steps of |p_sim - p_real| in mm (an episode's flange error);
-  ``free_mm`` the same over the free steps only (no grasp or push: ``interaction.detect``);
+  ``free_mm`` the same over the free steps only (no grasp, push or near-singular posture:
+  ``interaction.detect``);
 - ``lag``: the steps k (0..``MAX_LAG``) after which the flange is closest, on average over the
   episode, to where a command pointed: argmin_k mean_t |p[t + k] - c[t]|;
 - ``b``: the first-order per-step response p[t+1] - p[t] = b (c[t] - p[t]), least squares over the
@@ -152,8 +153,9 @@ class EpisodeAlignment:
     lag_sim: int
     b_real: float
     b_sim: float
-    # median |p_sim - p_real| over the free steps (neither grasping nor pushing: ``interaction.detect``;
-    # the arm-only replay models neither) and the share of steps left out of it
+    # median |p_sim - p_real| over the free steps (neither grasping, pushing nor near-singular:
+    # ``interaction.detect``; the arm-only replay models neither contact, the IK target is ill-defined
+    # near a singularity) and the share of steps left out of it
     free_mm: float = float("nan")
     masked: float = 0.0
 

@@ -92,12 +92,12 @@ class Suspect:
 @dataclass
 class Replayed:
     """What only the position-space replay knows about the held-out data: residual features and
-    the samples simulated but not scored (torque-saturated bursts, grasps and stalls)."""
+    the samples simulated but not scored (torque-saturated bursts, grasps, stalls, near-singular postures)."""
 
     features: Features
     saturated_fraction: float = 0.0  # held-out samples in torque-saturated bursts (``saturation.py``)
-    interaction_fraction: float = 0.0  # held-out samples in grasps/stalls (``interaction.py``)
-    masked: dict = field(default_factory=dict)  # trajectory name -> its grasp/stall/masked shares
+    interaction_fraction: float = 0.0  # held-out samples in grasps/stalls/near-singular postures (``interaction.py``)
+    masked: dict = field(default_factory=dict)  # trajectory name -> its grasp/stall/singular/masked shares
 
 
 @dataclass
@@ -232,14 +232,17 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
 
 
 def _log_masked(tr_ss: SegmentSet, he_ss: SegmentSet, log) -> None:
-    """Say which samples are simulated but not scored (saturation bursts, grasps and stalls)."""
+    """Say which samples are simulated but not scored (saturation bursts, grasps, stalls, near-singular postures)."""
+    from realm_ms.sysid.interaction import describe
+
     log(f"baseline: {tr_ss.n} train / {he_ss.n} held-out segments")
     if tr_ss.saturated_fraction or he_ss.saturated_fraction:
         log(f"torque-saturated bursts (a motor at its limit, +-{PAD_S:g} s): {tr_ss.saturated_fraction:.1%} of train, "
             f"{he_ss.saturated_fraction:.1%} of held-out samples simulated but not scored")
     if tr_ss.interaction_fraction or he_ss.interaction_fraction:
-        log(f"grasps and stalls against the scene (arm-only replay): {tr_ss.interaction_fraction:.1%} of train, "
-            f"{he_ss.interaction_fraction:.1%} of held-out samples simulated but not scored")
+        log(f"grasps and stalls against the scene (arm-only replay), near-singular IK targets: {tr_ss.interaction_fraction:.1%} "
+            f"of train, {he_ss.interaction_fraction:.1%} of held-out samples simulated but not scored "
+            f"({describe(tr_ss.trajs + he_ss.trajs)} of all samples)")
 
 
 def _screen(ev, tr_ss, he_ss, fixed, groups: list[Group], names: list[str], b_he, floor: float, cfg: DiagnoseConfig,

@@ -125,10 +125,11 @@ class CompareResult:
                "RMSE [rad] " + " ".join(f"{v:9.2e}" for v in self.per_joint_rmse),
                "max  [rad] " + " ".join(f"{v:9.2e}" for v in self.per_joint_max_abs_error)]
         if self.interaction_fraction:
-            out.append(f"grasps and stalls against the scene (not modelled by an arm-only replay): {self.interaction_fraction:.1%} "
-                       "of the scored samples simulated but not scored; per trajectory: "
-                       + ", ".join(f"{t['name']} {t['masked']['masked']:.0%}" for t in self.trajectories if t.get("masked")
-                                   and t["masked"]["masked"] > 0))
+            out.append(f"grasps and stalls against the scene (not modelled by an arm-only replay) and near-singular IK "
+                       f"targets: {self.interaction_fraction:.1%} of the scored samples simulated but not scored; per trajectory: "
+                       + ", ".join(f"{t['name']} {t['masked']['masked']:.0%}"
+                                   + (f" (singular {t['masked']['singular']:.0%})" if t["masked"].get("singular") else "")
+                                   for t in self.trajectories if t.get("masked") and t["masked"]["masked"] > 0))
         worst = sorted(self.trajectories, key=lambda t: -(t["rmse_rad"] or 0))[:3]
         out.append("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
         return out

@@ -207,6 +207,42 @@ def test_grasps_and_stalls_are_masked_and_counted():
     assert SegmentSet.build([free], length_s=8.0, burn_in_s=1.0).interaction_fraction == 0.0
 
 
+def test_near_singular_postures_are_masked_where_the_target_comes_from_ik():
+    """An arm stretched to a straight elbow (q4 ~ -0.47, the Panda's elbow singularity) under a
+    rebuilt Cartesian command is flagged there and not where the elbow is bent; the same samples
+    with a logged joint target are not flagged, and the share is in the summary."""
+    from realm_ms.sysid.interaction import describe, detect, sigma_min
+    from realm_ms.sysid.replay import SegmentSet
+    from realm_ms.sysid.timeseries import Trajectory
+
+    n = 90
+    t = np.arange(n) / 15.0
+    q4 = np.interp(np.arange(n), [0, 20, 40, 55, 75, n - 1], [-2.2, -2.2, -0.5, -0.5, -2.2, -2.2])
+    q = np.tile([0.0, 0.3, 0.0, 0.0, 0.0, 1.9, 0.8], (n, 1))
+    q[:, 3] = q4
+    q_cmd = np.vstack([q[1:], q[-1:]])
+    rebuilt = {"command_mode": "rebuild", "command_space": "cartesian_position"}
+    tr = Trajectory("stretch", t, q, q_cmd, gripper=np.zeros(n), meta=dict(rebuilt))
+    hit = detect(tr)
+    assert hit.singular[40:55].all() and not hit.singular[:20].any() and not hit.singular[80:].any()
+    assert not (hit.grasp.any() or hit.stall.any())
+    # flagged exactly where the Jacobian is near singular (plus the padding), nowhere else
+    from realm_ms.agents.droid_action_spaces import DroidIK
+    from realm_ms.sysid.interaction import PAD_S, SINGULAR_SIGMA
+
+    low = sigma_min(q, DroidIK()) < SINGULAR_SIGMA
+    pad = int(round(PAD_S * 15))
+    near = np.convolve(low, np.ones(2 * pad + 1), "same") > 0
+    assert low.any() and hit.singular[low].all() and not hit.singular[~near].any()
+    for meta in ({"command_mode": "logged", "command_space": "joint_position"},
+                 {"command_mode": "rebuild", "command_space": "joint_velocity"}, {}):
+        assert not detect(Trajectory("own", t, q, q_cmd, gripper=np.zeros(n), meta=meta)).singular.any()
+    ss = SegmentSet.build([tr], length_s=8.0, burn_in_s=1.0)
+    share = tr.meta["interaction"]
+    assert share["singular"] == share["masked"] == round(hit.singular.mean(), 4) > 0.2
+    assert 0.2 < ss.interaction_fraction < 0.8 and f"singular {hit.singular.mean():.1%}" in describe([tr])
+
+
 def test_align_report_on_droid_episodes(tmp_path, ev):
     """`realm sysid align`: on DROID-format episodes of a robot with a command delay and softer
     gains, the true model's closed-loop replay is mm-close to the data and its lag and response

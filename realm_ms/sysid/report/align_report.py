@@ -6,8 +6,9 @@ state (``alignment.replay_closed_loop``) under the nominal robot, each step of t
 waterfall (its gain preset, then its effects added one at a time) and the full model; the metrics
 are ``alignment.py``'s (flange error in mm, lag in steps, first-order response b), next to the
 per-joint error in mrad, with the response time tau = -dt / ln(1 - b) beside them. Grasps and
-stalls against the scene (``interaction.py``) stay in the replay; the flange error over the free
-samples alone is reported beside the error over all of them, with the share left out.
+stalls against the scene and near-singular postures (``interaction.py``) stay in the replay; the
+flange error over the free samples alone is reported beside the error over all of them, with the
+share left out and the near-singular share of it.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ class ModelRun:
     label: str
     sims: list[np.ndarray]
     rows: list  # alignment.EpisodeAlignment per episode
-    free_mm: list[float]  # median flange error over the free (not grasping/stalled) samples
+    free_mm: list[float]  # median flange error over the free (not grasping/stalled/near-singular) samples
     overall: object = None  # alignment.LabAlignment named "all"
     labs: list = field(default_factory=list)
 
@@ -74,7 +75,7 @@ def _med(xs) -> float:
     return float(np.median(xs)) if xs else float("nan")
 
 
-def _overview(data_name, episodes, skipped, masked, runs, model_name, seconds) -> tuple[str, str]:
+def _overview(data_name, episodes, skipped, shares, runs, model_name, seconds) -> tuple[str, str]:
     first, last = runs[0], runs[-1]
     real_b = first.overall.b_real
     html = (f"<p>Data: <code>{esc(data_name)}</code>, {len(episodes)} episodes, {sum(e.steps for e in episodes)} steps "
@@ -83,9 +84,11 @@ def _overview(data_name, episodes, skipped, masked, runs, model_name, seconds) -
             f"({seconds:.0f} s).</p>")
     if skipped:
         html += "<p class='bad'>Skipped (unreadable or invalid): " + "; ".join(esc(s) for s in skipped) + "</p>"
-    html += (f"<p>Grasps and stalls against the scene (an arm-only replay does not model them): "
-             f"{np.mean(masked):.0%} of the steps on average (median {np.median(masked):.0%} per episode); the "
-             "<i>free</i> columns leave them out.</p>")
+    masked, singular = [s["masked"] for s in shares], [s["singular"] for s in shares]
+    html += (f"<p>Grasps and stalls against the scene (an arm-only replay does not model them) and near-singular "
+             f"postures (the IK's joint target is ill-defined there): {np.mean(masked):.0%} of the steps on average "
+             f"(median {np.median(masked):.0%} per episode; near-singular {np.mean(singular):.1%} on average, in "
+             f"{sum(s > 0 for s in singular)} episodes); the <i>free</i> columns leave them out.</p>")
     rows = []
     for r in (first, last) if last is not first else (first,):
         o = r.overall
@@ -118,18 +121,19 @@ def _joints(mrad: list[float]) -> str:
     return f"<span style='white-space:nowrap'>{np.median(mrad):.0f} / {mrad[k]:.0f} J{k + 1}</span>"
 
 
-def _episodes(runs, masked) -> tuple[str, str]:
+def _episodes(runs, shares) -> tuple[str, str]:
     first, last = runs[0], runs[-1]
-    header = ["episode", "lab", "steps", "masked", "lag real", "b real", f"{first.label} mm", "free mm", "lag", "b",
-              "mrad med / worst"]
+    header = ["episode", "lab", "steps", "masked", "singular", "lag real", "b real", f"{first.label} mm", "free mm",
+              "lag", "b", "mrad med / worst"]
     if last is not first:
         header += [f"{last.label} mm", "free mm", "lag", "b", "mrad med / worst"]
     body, cls = [], []
     order = np.argsort([-r.flange_mm for r in first.rows])
     for i in order:
         a = first.rows[i]
-        row = [a.name, a.lab, a.steps, f"{masked[i]:.0%}", a.lag_real, f"{a.b_real:.2f}", f"{a.flange_mm:.1f}",
-               f"{first.free_mm[i]:.1f}", a.lag_sim, f"{a.b_sim:.2f}", _joints(a.joint_mrad)]
+        row = [a.name, a.lab, a.steps, f"{shares[i]['masked']:.0%}", f"{shares[i]['singular']:.0%}", a.lag_real,
+               f"{a.b_real:.2f}", f"{a.flange_mm:.1f}", f"{first.free_mm[i]:.1f}", a.lag_sim, f"{a.b_sim:.2f}",
+               _joints(a.joint_mrad)]
         c = [""] * len(row)
         if last is not first:
             z = last.rows[i]
@@ -155,7 +159,7 @@ def _overlays(episodes, runs, free, n_worst: int = 3) -> tuple[str, str]:
                 a.plot(t, last.sims[i][:, j], "tab:blue", lw=1, label=last.label)
             bad = ~free[i]
             if bad.any():
-                a.fill_between(t, *a.get_ylim(), where=bad, color="0.85", zorder=0, label="grasp/stall")
+                a.fill_between(t, *a.get_ylim(), where=bad, color="0.85", zorder=0, label="masked")
             a.set_ylabel(f"J{j + 1} [rad]", fontsize=8)
         ax[0, 0].legend(fontsize=7, ncol=4)
         ax[3, 1].axis("off")
@@ -195,7 +199,7 @@ def build_align_report(episodes, model, model_name: str, out: Path, data_name: s
     t0 = time.perf_counter()
     hits = [detect(e.traj) for e in episodes]
     free = [~h.masked for h in hits]
-    masked = [float(h.masked.mean()) for h in hits]
+    shares = [h.summary() for h in hits]
     steps = waterfall_models(model) if waterfall or model is None else [("nominal", None)]
     if model is not None and (not waterfall or len(steps) == 1):
         steps.append((model_name, model))
@@ -206,8 +210,8 @@ def build_align_report(episodes, model, model_name: str, out: Path, data_name: s
     if model is not None:
         runs[-1].label = model_name
     seconds = time.perf_counter() - t0
-    sections = [_overview(data_name, episodes, skipped or [], masked, runs, model_name, seconds), _labs(runs),
-                _episodes(runs, masked), _overlays(episodes, runs, free)]
+    sections = [_overview(data_name, episodes, skipped or [], shares, runs, model_name, seconds), _labs(runs),
+                _episodes(runs, shares), _overlays(episodes, runs, free)]
     if len(runs) > 2:
         sections.append(_waterfall(runs))
     sections.append(("Credit", "<p>Real episodes: DROID (Khazatsky et al., \"DROID: A Large-Scale In-The-Wild Robot "
@@ -217,6 +221,7 @@ def build_align_report(episodes, model, model_name: str, out: Path, data_name: s
     doc = {"model": model_name, "seconds": seconds, "skipped": skipped or [],
            "runs": [{"label": r.label, "overall": r.overall.__dict__, "labs": [x.__dict__ for x in r.labs],
                      "free_flange_mm": _med(r.free_mm),
-                     "episodes": [dict(x.__dict__, free_flange_mm=f, masked=m) for x, f, m in zip(r.rows, r.free_mm, masked)]}
+                     "episodes": [dict(x.__dict__, free_flange_mm=f, masked=m["masked"], singular=m["singular"])
+                                  for x, f, m in zip(r.rows, r.free_mm, shares)]}
                     for r in runs]}
     return json.loads(json.dumps(doc, default=float))
