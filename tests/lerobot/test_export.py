@@ -32,6 +32,25 @@ def _dataset(cfg):
     return LeRobotDataset(cfg.repo_id, root=cfg.out, video_backend="pyav")
 
 
+def test_realm_sysid_reads_an_export_as_joint_targets(tmp_path):
+    """What `realm export` writes is data the workbench takes (`realm sysid compare DATASET`): each
+    episode a trajectory at 15 Hz whose measured joints and joint targets are the dataset's
+    observation.state and action, the gripper beside them (the workbench needs 20 samples)."""
+    from realm_ms.lerobot.export import ExportConfig, export_dataset
+    from realm_ms.sysid.data_io import load_dir
+
+    cfg = ExportConfig(out=tmp_path / "d", tasks=[TASKS[1]], seed=3, width=32, height=24, max_steps=24, progress=False)
+    export_dataset(cfg)
+    (tr,) = load_dir(cfg.out)
+    data = _dataset(cfg).hf_dataset.with_format("numpy")
+    state, action = np.stack(data["observation.state"]), np.stack(data["action"])
+    assert len(tr.t) == len(state) == 24 and np.allclose(np.diff(tr.t), 1 / 15)
+    np.testing.assert_allclose(tr.q, state[:, :7], atol=1e-6)
+    np.testing.assert_allclose(tr.q_cmd, action[:, :7], atol=1e-6)
+    np.testing.assert_allclose(tr.gripper, state[:, 7], atol=1e-6)
+    assert np.abs(np.diff(tr.q_cmd, axis=0)).max() > 1e-3  # the expert moved: not a constant target
+
+
 def test_dataset_reads_back_with_droid_features(exported):
     cfg, summary = exported
     assert summary["written"] == len(TASKS) * EPISODES
