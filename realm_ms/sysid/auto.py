@@ -8,7 +8,10 @@ not tell from it (``contenders``, until one reaches the floor), keeping the one 
 and **keeps the step only when the held-out RMSE falls by more than noise allows**: by at least
 ``min_gain`` of its current value and by at least ``min_floor_drop`` x the judging floor (a fit that
 only absorbed noise on the train split does not lower the held-out error that much). A rejected suspect is not tried again; the
-next one is. The loop stops at the floor (held-out RMSE <= ``found_factor`` x the judging floor),
+next one is. Once a later step is kept, each look-alike an earlier step could not tell from the
+effect it kept is fitted again in that effect's place, jointly with the rest (``_recontest``): it
+takes the place (a swap step) when better by the keep bar, and a pair within the bar is reported
+as confounded. The loop stops at the floor (held-out RMSE <= ``found_factor`` x the judging floor),
 when no suspect helps, or after ``max_steps`` kept steps / ``max_fits`` fits.
 
 Verdict: ``at_floor`` (the final model is within ``found_factor`` x the judging floor),
@@ -276,11 +279,8 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         # less than a step must bring): fitted alone, before the effects still missing are modelled,
         # so they are contested again once a later step is kept
         ties = [s for a, s, _ in fitted[1:] if a - after < _bar_of(cfg, after, floor)]
-        if any(s.kept for s in steps[:-1]):
-            model, current, fits = _recontest(space, f.model, after, floor, pending, steps, confounded, cfg, fits,
-                                              d.verdict, log)
-        else:
-            model, current = f.model, after
+        model, current, fits = _recontest(space, f.model, after, floor, pending, steps, confounded, cfg, fits,
+                                          d.verdict, log)
         if ties:
             pending[sus.effect] = ties
         if current <= dcfg.found_factor * floor or _added(steps) >= cfg.max_steps:
