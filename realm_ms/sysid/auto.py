@@ -8,8 +8,8 @@ not tell from it (``contenders``, until one reaches the floor), keeping the one 
 and **keeps the step only when the held-out RMSE falls by more than noise allows**: by at least
 ``min_gain`` of its current value and by at least ``min_floor_drop`` x the judging floor (a fit that
 only absorbed noise on the train split does not lower the held-out error that much). A rejected suspect is not tried again; the
-next one is. Once a later step is kept, each look-alike an earlier step could not tell from the
-effect it kept is fitted again in that effect's place, jointly with the rest (``_recontest``): it
+next one is. Once a later step is kept, each look-alike an earlier step fitted beside the effect it
+kept is fitted again in that effect's place, jointly with the rest (``_recontest``): it
 takes the place (a swap step) when better by the keep bar, and a pair within the bar is reported
 as confounded. The loop stops at the floor (held-out RMSE <= ``found_factor`` x the judging floor),
 when no suspect helps, or after ``max_steps`` kept steps / ``max_fits`` fits.
@@ -116,8 +116,8 @@ def _added(steps: list[AutoStep]) -> int:
 
 def _recontest(space, model: RobotModel, current: float, floor: float, pending: dict, steps: list[AutoStep],
                confounded: list[dict], cfg: AutoConfig, fits: int, verdict: str, log):
-    """Each earlier kept effect against the look-alikes its step could not tell from it, now that a
-    later step is kept: each look-alike is fitted in its place, jointly with everything else kept
+    """Each earlier kept effect against the look-alikes its step fitted beside it, now that a later
+    step is kept: each look-alike is fitted in its place, jointly with everything else kept
     (a target filter imitates "slow + late" better than a pure delay while softer gains are still
     unmodelled, and loses once they are). It takes the place (a swap step) when it lowers the
     held-out error by a step's bar; within that bar of it the pair is confounded and said so. Each
@@ -238,7 +238,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
     tried: set[str] = set()
     screened = space.screened(dcfg)
     fits = 0
-    pending: dict[str, list[Suspect]] = {}  # kept effect -> its look-alikes to contest again after the next kept step
+    pending: dict[str, list[Suspect]] = {}  # kept effect -> its step's look-alikes, to contest after the next kept step
     confounded: list[dict] = []
     while (_added(steps) < cfg.max_steps and fits < cfg.max_fits
            and current > dcfg.found_factor * floor):
@@ -275,14 +275,14 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
             + ("(kept)" if kept else "(rejected: within what noise allows)"))
         if not kept:
             continue
-        # the look-alikes this step could not tell from the one kept (their held-out errors differ by
-        # less than a step must bring): fitted alone, before the effects still missing are modelled,
-        # so they are contested again once a later step is kept
-        ties = [s for a, s, _ in fitted[1:] if a - after < _bar_of(cfg, after, floor)]
         model, current, fits = _recontest(space, f.model, after, floor, pending, steps, confounded, cfg, fits,
                                           d.verdict, log)
-        if ties:
-            pending[sus.effect] = ties
+        # this step's look-alikes were fitted before the effects still missing are modelled, which
+        # can rank them either way (DROID-format data, a delay and softer gains: the delay fitted
+        # alone ends 50 % above the target filter, and 10x below it once the gains are in): each is
+        # contested again, best first, once a later step is kept
+        if len(fitted) > 1:
+            pending[sus.effect] = [s for _, s, _ in fitted[1:]]
         if current <= dcfg.found_factor * floor or _added(steps) >= cfg.max_steps:
             break
         bar.set_description("auto: diagnosing")

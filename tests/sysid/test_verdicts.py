@@ -263,31 +263,34 @@ def test_the_search_budget_takes_whole_train_trajectories_in_order_and_keeps_the
     assert [t.name for t in sub.train] == ["t0", "t2"] and sub.heldout is held
 
 
-@pytest.mark.parametrize("case,joint", [("swap", 0.35e-3), ("confounded", 2.80e-3), ("stays", 4.0e-3)])
-def test_auto_contests_an_earlier_look_alike_again_once_a_later_step_is_kept(case, joint):
-    """A delay and softer gains: fitted alone first, the target ramp edges out the delay (6.36 vs
-    6.41 mrad: within a step's bar, so the step could not tell them apart); the gains are kept next
-    (2.86 mrad). The delay is then fitted in the ramp's place with the gains refitted: far better,
-    it takes the place (a swap step) and the run ends at the floor; as good within the bar, both are
-    named as confounded; clearly worse, the ramp stays. The target filter, clearly worse in the
-    first step, is not contested again, and the run stays within ``max_fits``."""
+@pytest.mark.parametrize("case,joint,max_fits", [("swap", 0.35e-3, 6), ("confounded", 2.80e-3, 6), ("stays", 4.0e-3, 6),
+                                                  ("budget", 0.35e-3, 5)])
+def test_auto_contests_an_earlier_look_alike_again_once_a_later_step_is_kept(case, joint, max_fits):
+    """A delay and softer gains: fitted alone first, the target ramp beats the target filter and the
+    delay; the gains are kept next (2.86 mrad). Then each look-alike is fitted in the ramp's place
+    with the gains refitted, best first: the filter, worse, leaves the ramp in place; the delay, far
+    better, takes it (a swap step; the run ends at the floor); as good within the keep bar, the pair
+    is named as confounded; clearly worse, the ramp stays. ``max_fits`` holds: with 5, the delay is
+    never contested."""
     from realm_ms.sysid import auto as auto_mod
 
-    first = [_s("target_interpolation", 30e-3, 6.4e-3), _s("latency", 30e-3, 6.5e-3), _s("target_filter", 30e-3, 6.9e-3),
+    first = [_s("target_interpolation", 30e-3, 6.4e-3), _s("latency", 30e-3, 9.5e-3), _s("target_filter", 30e-3, 6.9e-3),
              _s("gain_mismatch", 30e-3, 20e-3)]
     first[0].confounded_with = ["latency", "target_filter"]
-    alone = {"target_interpolation": 6.36e-3, "latency": 6.41e-3, "target_filter": 7.2e-3}
-    joint_of = {frozenset({"target_interpolation"}): 2.86e-3, frozenset({"gain_mismatch"}): joint}
+    alone = {"target_interpolation": 6.36e-3, "latency": 9.46e-3, "target_filter": 7.2e-3}
+    with_gains = {"latency": joint, "target_filter": 5e-3}
 
     def heldout(names, added):
-        return alone[added] if not names else joint_of[names]
+        return alone[added] if not names else 2.86e-3 if added == "gain_mismatch" else with_gains[added]
 
     space = ScriptedSpace(30e-3, [first, [_s("gain_mismatch", 6.36e-3, 3e-3)]], heldout, noise=2e-4)
-    res = auto_mod.auto(space, progress=False, log=lambda *a: None, config=auto_mod.AutoConfig(max_fits=5))
+    res = auto_mod.auto(space, progress=False, log=lambda *a: None, config=auto_mod.AutoConfig(max_fits=max_fits))
     out = res.to_json()
-    assert space.fitted == ["target_interpolation", "latency", "target_filter", "gain_mismatch", "latency"]
+    assert space.fitted == ["target_interpolation", "latency", "target_filter", "gain_mismatch", "target_filter",
+                            "latency"][:max_fits]
     labels = [auto_mod.step_label(s) for s in out["steps"]]
     assert labels[:2] == ["+target_interpolation", "+gain_mismatch"]
+    assert {"effect": "target_filter", "heldout_rmse": 5e-3, "replaces": "target_interpolation"} in out["details"]["rejected"]
     if case == "swap":
         assert labels[2:] == ["latency for target_interpolation"] and out["steps"][2]["replaces"] == "target_interpolation"
         assert sorted(res.model.names) == ["gain_mismatch", "latency"]
@@ -295,8 +298,11 @@ def test_auto_contests_an_earlier_look_alike_again_once_a_later_step_is_kept(cas
         assert "latency for target_interpolation 3.50e-04" in out["details"]["message"]
         return
     assert labels[2:] == [] and sorted(res.model.names) == ["gain_mismatch", "target_interpolation"]
-    assert {"effect": "latency", "heldout_rmse": joint, "replaces": "target_interpolation"} in out["details"]["rejected"]
     assert out["final"]["verdict"] == "partially_explained"
+    if case == "budget":
+        assert all(r.get("replaces") != "target_interpolation" or r["effect"] != "latency" for r in out["details"]["rejected"])
+        return
+    assert {"effect": "latency", "heldout_rmse": joint, "replaces": "target_interpolation"} in out["details"]["rejected"]
     if case == "confounded":
         assert out["final"]["confounded"] == [{"effects": ["target_interpolation", "latency"],
                                                "heldout_rmse": [2.86e-3, joint]}]
