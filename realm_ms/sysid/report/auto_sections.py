@@ -31,7 +31,7 @@ def auto_waterfall(d: ReportData):
     x.legend(fontsize=8)
     rows = [[lab, f"{v:.3e}", _ratio(v, floor)] for lab, v in zip(labels, vals)]
     for r in (a.get("details") or {}).get("rejected", []):
-        rows.append([f"(rejected) {step_label(r)}", f"{r['heldout_rmse']:.3e}", _ratio(r['heldout_rmse'], floor)])
+        rows.append([f"(rejected) {step_label(r).lstrip('+')}", f"{r['heldout_rmse']:.3e}", _ratio(r['heldout_rmse'], floor)])
     msg = (a.get("details") or {}).get("message", "")
     head = f"<p>verdict <b>{esc(fin['verdict'])}</b>. {esc(msg)}</p>"
     return ("Auto: nominal → + effect → …", head + to_img(fig, "auto waterfall")
