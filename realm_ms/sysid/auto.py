@@ -114,21 +114,31 @@ def _added(steps: list[AutoStep]) -> int:
     return len([s for s in steps if s.kept and not s.replaces])
 
 
+def _bare(effect: str) -> str:
+    """The effect's name in a model, from a step's spec ("link_mass:fit_com=true" -> "link_mass")."""
+    return effect.split(":")[0]
+
+
 def _recontest(space, model: RobotModel, current: float, floor: float, pending: dict, steps: list[AutoStep],
-               confounded: list[dict], cfg: AutoConfig, fits: int, verdict: str, log):
+               confounded: list[dict], cfg: AutoConfig, fits: int, verdict: str, screened, log):
     """Each earlier kept effect against the look-alikes its step fitted beside it, now that a later
     step is kept: each look-alike is fitted in its place, jointly with everything else kept
     (a target filter imitates "slow + late" better than a pure delay while softer gains are still
     unmodelled, and loses once they are). It takes the place (a swap step) when it lowers the
     held-out error by a step's bar; within that bar of it the pair is confounded and said so. Each
-    pair is contested once; every fit counts against ``max_fits``. Returns (model, current, fits)."""
+    pair is contested once; every fit counts against ``max_fits``, and a look-alike the diagnosis
+    does not screen (LuGre: as costly as the other fits together) only within ``unscreened_within``
+    x the floor, as in its step. Returns (model, current, fits)."""
     for effect in list(pending):
         for sus in pending.pop(effect):
-            if fits >= cfg.max_fits:
-                log(f"auto: {sus.effect} not contested against {effect}: {cfg.max_fits} fits spent")
+            costly = sus.effect not in screened and current > cfg.unscreened_within * floor
+            if fits >= cfg.max_fits or costly:
+                log(f"auto: {sus.effect} not contested against {effect}: "
+                    + (f"{cfg.max_fits} fits spent" if not costly else
+                       f"not screened, and {current / floor:.1f}x the floor is above {cfg.unscreened_within:g}x"))
                 continue
             base = model.copy()
-            base.effects = [fx for fx in base.effects if fx.name != effect]
+            base.effects = [fx for fx in base.effects if fx.name != _bare(effect)]
             fits += 1
             f = space.fit_suspect(base, sus, cfg, log=lambda *a: None)
             after, bar = f.heldout_after, _bar_of(cfg, current, floor)
@@ -276,7 +286,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         if not kept:
             continue
         model, current, fits = _recontest(space, f.model, after, floor, pending, steps, confounded, cfg, fits,
-                                          d.verdict, log)
+                                          d.verdict, screened, log)
         # this step's look-alikes were fitted before the effects still missing are modelled, which
         # can rank them either way (DROID-format data, a delay and softer gains: the delay fitted
         # alone ends 50 % above the target filter, and 10x below it once the gains are in): each is
@@ -302,7 +312,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         verdict = "unexplained"
     details, note = space.details(d, model)
     details["searched_train"] = [t.name for t in space.train]
-    confounded = [c for c in confounded if c["effects"][0] in model.names]
+    confounded = [c for c in confounded if _bare(c["effects"][0]) in model.names]
     msg = _message(verdict, nominal, current, floor, kept, model.params_at_bounds(),
                    unscreened(screened, tried | set(model.names), space.library()), dcfg.found_factor, unit)
     msg += confounded_note(confounded, unit)
