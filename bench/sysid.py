@@ -72,15 +72,16 @@ def run(device: str, workers: int, data: Path, hidden: str) -> dict:
 
 def run_auto(args, data: Path, space: str) -> dict:
     from realm_ms.sysid import api
+    from realm_ms.sysid.auto import step_label
 
     t0 = time.perf_counter()
     a = api.auto(str(data), workers=args.workers, device="cpu", log=lambda m: print("  " + m, file=sys.stderr),
                  space=space).to_json()
     wall = time.perf_counter() - t0
     r = {"mode": f"auto ({space} space)", "hidden": args.hidden, "wall_s": wall, "unit": a["unit"],
-         "nominal": a["nominal_heldout_rmse"], "steps": [(s["effect"], s["heldout_rmse"]) for s in a["steps"]],
+         "nominal": a["nominal_heldout_rmse"], "steps": [(step_label(s), s["heldout_rmse"]) for s in a["steps"]],
          "final": a["final"], "workers": args.workers, "cpu_count": os.cpu_count(), "load": os.getloadavg()}
-    chain = " -> ".join([f"{r['nominal']:.3g}"] + [f"+{e} {v:.3g}" for e, v in r["steps"]])
+    chain = " -> ".join([f"{r['nominal']:.3g}"] + [f"{e} {v:.3g}" for e, v in r["steps"]])
     print(f"auto ({space}): {chain} {a['unit']}; final {a['final']['verdict']} (noise floor "
           f"{a['final']['noise_floor']:.3g}); {wall:.0f} s wall, {args.workers} worker(s), load {r['load'][0]:.1f}; goal < 300 s: "
           f"{'met' if wall < 300 else 'NOT met'}")
@@ -99,6 +100,7 @@ def run_droid_auto(args) -> int:
     import subprocess
 
     from realm_ms.sysid import api
+    from realm_ms.sysid.auto import step_label
 
     hidden = args.hidden if args.hidden != "coulomb_friction:fc=0.3" else DROID_HIDDEN
     n_train, n_held, secs = (float(x) for x in args.size.split(","))
@@ -123,10 +125,10 @@ def run_droid_auto(args) -> int:
             f = a["final"]
             r = {"mode": mode, "config": config, "wall_s": wall, "cpu_s": cpu, "load": os.getloadavg()[0],
                  "verdict": f["verdict"], "nominal_rad": a["nominal_heldout_rmse"], "final_rad": f["heldout_rmse"],
-                 "floor_rad": a["details"]["judging_floor"], "steps": [(s["effect"], s["heldout_rmse"]) for s in a["steps"]],
+                 "floor_rad": a["details"]["judging_floor"], "steps": [(step_label(s), s["heldout_rmse"]) for s in a["steps"]],
                  "searched_train": a["details"]["searched_train"]}
             rows.append(r)
-            chain = " -> ".join([f"{r['nominal_rad']:.3g}"] + [f"+{e} {v:.3g}" for e, v in r["steps"]])
+            chain = " -> ".join([f"{r['nominal_rad']:.3g}"] + [f"{e} {v:.3g}" for e, v in r["steps"]])
             print(f"{mode:>6}: {wall:6.0f} s wall, {cpu:6.0f} s CPU (load {r['load']:.1f}): {chain} rad; "
                   f"{r['verdict']} at {r['final_rad'] / r['floor_rad']:.1f}x the floor {r['floor_rad']:.2e} rad", flush=True)
     ratio = rows[1]["wall_s"] / rows[0]["wall_s"]
@@ -144,6 +146,7 @@ def run_native_sweep(args) -> int:
     logs (t, q, qd, tau) or position logs with the 15 Hz command (q_cmd), both at 1 kHz. Each
     finished case is written at once."""
     from realm_ms.sysid import api
+    from realm_ms.sysid.auto import step_label
     from realm_ms.sysid.reference_native import VARIANTS, synth_native
 
     n_train, n_held, dur = (int(x) for x in args.size.split(","))
@@ -164,18 +167,18 @@ def run_native_sweep(args) -> int:
             f = a["final"]
             floor = a["details"]["judging_floor"]
             row = {"space": args.space, "variant": name, "spec": VARIANTS[name], "seed": seed,
-                   "nominal": a["nominal_heldout_rmse"], "steps": [(x["effect"], x["heldout_rmse"]) for x in a["steps"]],
+                   "nominal": a["nominal_heldout_rmse"], "steps": [(step_label(x), x["heldout_rmse"]) for x in a["steps"]],
                    "final": f["heldout_rmse"], "floor": floor, "ratio": f["heldout_rmse"] / floor, "verdict": f["verdict"],
                    "params": a["steps"][-1]["params"] if a["steps"] else {}, "wall_s": time.perf_counter() - t0}
             rows.append(row)
             print(f"{name} seed {seed}: {scale * row['nominal']:.3f} -> "
-                  + " -> ".join(f"+{e} {scale * v:.3f}" for e, v in row["steps"])
+                  + " -> ".join(f"{e} {scale * v:.3f}" for e, v in row["steps"])
                   + f" {unit}; {row['ratio']:.2f}x floor {scale * floor:.3f}: {row['verdict']} ({row['wall_s']:.0f} s)",
                   flush=True)
             lines = [f"| native variant | seed | nominal [{unit}] | auto steps (held-out after) | final / floor | verdict | wall |",
                      "|---|---|---|---|---|---|---|"]
             for r in rows:
-                st = ", ".join(f"+{e} ({scale * v:.3f})" for e, v in r["steps"]) or "-"
+                st = ", ".join(f"{e} ({scale * v:.3f})" for e, v in r["steps"]) or "-"
                 lines.append(f"| {r['variant']} | {r['seed']} | {scale * r['nominal']:.3f} | {st} | {scale * r['final']:.3f} / "
                              f"{scale * r['floor']:.3f} = {r['ratio']:.2f}x | {r['verdict']} | {r['wall_s']:.0f} s |")
             out.write_text(json.dumps(rows, indent=2, default=float))

@@ -223,7 +223,9 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
     m = _model(model)
     sp = _make_space(train, held, space, m, workers, device, progress)
     res = _auto(sp, m, AutoConfig(seed=seed, **config), progress, log)
-    res.model.provenance.update(_provenance(data, sp, train, held, [s.effect for s in res.steps], res.heldout_rmse))
+    swapped_out = {s.replaces for s in res.steps}
+    res.model.provenance.update(_provenance(data, sp, train, held, [s.effect for s in res.steps if s.effect not in swapped_out],
+                                            res.heldout_rmse))
     if out is not None:
         res.model.save(out)
     res.split = _split_block(train, held, seed)

@@ -8,7 +8,10 @@ not tell from it (``contenders``, until one reaches the floor), keeping the one 
 and **keeps the step only when the held-out RMSE falls by more than noise allows**: by at least
 ``min_gain`` of its current value and by at least ``min_floor_drop`` x the judging floor (a fit that
 only absorbed noise on the train split does not lower the held-out error that much). A rejected suspect is not tried again; the
-next one is. The loop stops at the floor (held-out RMSE <= ``found_factor`` x the judging floor),
+next one is. Once a later step is kept, each look-alike an earlier step fitted beside the effect it
+kept is fitted again in that effect's place, jointly with the rest (``_recontest``): it
+takes the place (a swap step) when better by the keep bar, and a pair within the bar is reported
+as confounded. The loop stops at the floor (held-out RMSE <= ``found_factor`` x the judging floor),
 when no suspect helps, or after ``max_steps`` kept steps / ``max_fits`` fits.
 
 Verdict: ``at_floor`` (the final model is within ``found_factor`` x the judging floor),
@@ -62,9 +65,19 @@ class AutoStep:
     heldout_rmse: float
     kept: bool
     verdict_before: str
+    replaces: str = ""  # a swap: the earlier kept look-alike this effect took the place of
 
     def to_json(self) -> dict:
-        return {"effect": self.effect, "params": self.params, "heldout_rmse": self.heldout_rmse}
+        out = {"effect": self.effect, "params": self.params, "heldout_rmse": self.heldout_rmse}
+        if self.replaces:
+            out["replaces"] = self.replaces
+        return out
+
+
+def step_label(step: dict) -> str:
+    """A kept step as the message, the CLI and the report's waterfall name it: "+latency", or
+    "latency for target_filter" for a swap (``AutoStep.to_json()``)."""
+    return f"{step['effect']} for {step['replaces']}" if step.get("replaces") else f"+{step['effect']}"
 
 
 def contenders(cands: list, screened, tried: set[str], library=None) -> list:
@@ -85,6 +98,63 @@ def contenders(cands: list, screened, tried: set[str], library=None) -> list:
             out.append(Suspect(name, 0.0, float("nan"), float("nan"), {},
                                f"a look-alike of {top.effect} that diagnose does not screen"))
     return out
+
+
+def _bar_of(cfg: AutoConfig, current: float, floor: float) -> float:
+    """How much lower a step must bring the held-out error to be kept: more than noise allows."""
+    return max(cfg.min_gain * current, cfg.min_floor_drop * floor)
+
+
+def _rounded(params: dict) -> dict[str, float]:
+    return {k: round(float(v), 9) for k, v in params.items()}
+
+
+def _added(steps: list[AutoStep]) -> int:
+    """Effects the kept steps added (a swap adds none)."""
+    return len([s for s in steps if s.kept and not s.replaces])
+
+
+def _bare(effect: str) -> str:
+    """The effect's name in a model, from a step's spec ("link_mass:fit_com=true" -> "link_mass")."""
+    return effect.split(":")[0]
+
+
+def _recontest(space, model: RobotModel, current: float, floor: float, pending: dict, steps: list[AutoStep],
+               confounded: list[dict], cfg: AutoConfig, fits: int, verdict: str, screened, log):
+    """Each earlier kept effect against the look-alikes its step fitted beside it, now that a later
+    step is kept: each look-alike is fitted in its place, jointly with everything else kept
+    (a target filter imitates "slow + late" better than a pure delay while softer gains are still
+    unmodelled, and loses once they are). It takes the place (a swap step) when it lowers the
+    held-out error by a step's bar; within that bar of it the pair is confounded and said so. Each
+    pair is contested once; every fit counts against ``max_fits``, and a look-alike the diagnosis
+    does not screen (LuGre: as costly as the other fits together) only within ``unscreened_within``
+    x the floor, as in its step. Returns (model, current, fits)."""
+    for effect in list(pending):
+        for sus in pending.pop(effect):
+            costly = sus.effect not in screened and current > cfg.unscreened_within * floor
+            if fits >= cfg.max_fits or costly:
+                log(f"auto: {sus.effect} not contested against {effect}: "
+                    + (f"{cfg.max_fits} fits spent" if not costly else
+                       f"not screened, and {current / floor:.1f}x the floor is above {cfg.unscreened_within:g}x"))
+                continue
+            base = model.copy()
+            base.effects = [fx for fx in base.effects if fx.name != _bare(effect)]
+            fits += 1
+            f = space.fit_suspect(base, sus, cfg, log=lambda *a: None)
+            after, bar = f.heldout_after, _bar_of(cfg, current, floor)
+            swap = current - after >= bar
+            steps.append(AutoStep(sus.effect, _rounded(f.params) if swap else {}, after, swap, verdict, effect))
+            if swap:
+                log(f"auto: {sus.effect} for {effect}: held-out {current:.3e} -> {after:.3e} {space.unit} "
+                    "(swapped: the look-alike fits better with the rest refitted)")
+                model, current = f.model, after
+                break
+            tie = abs(after - current) < bar
+            if tie:
+                confounded.append({"effects": [effect, sus.effect], "heldout_rmse": [current, after]})
+            log(f"auto: {sus.effect} for {effect}: held-out {current:.3e} -> {after:.3e} {space.unit} "
+                + ("(confounded: within what noise allows)" if tie else f"({effect} stays)"))
+    return model, current, fits
 
 
 def _start_spec(effect: str, params: dict[str, float]) -> str:
@@ -135,14 +205,17 @@ class AutoResult:
     model: RobotModel
     details: dict = field(default_factory=dict)  # the space's own (``Space.details``)
     split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
+    # kept effects a look-alike fits as well in place of: [{"effects": [kept, look-alike], "heldout_rmse": [2]}]
+    confounded: list[dict] = field(default_factory=list)
 
     def to_json(self) -> dict:
         out = {"unit": self.unit, "nominal_heldout_rmse": self.nominal_heldout_rmse,
                "steps": [s.to_json() for s in self.steps],
-               "final": {"heldout_rmse": self.heldout_rmse, "noise_floor": self.noise_floor, "verdict": self.verdict},
+               "final": {"heldout_rmse": self.heldout_rmse, "noise_floor": self.noise_floor, "verdict": self.verdict,
+                         "confounded": self.confounded},
                "friction_curve": friction_curve(self.model),
                "details": {"judging_floor": self.judging_floor, "found_factor": self.found_factor, **self.details,
-                           "rejected": [{"effect": s.effect, "heldout_rmse": s.heldout_rmse} for s in self.rejected],
+                           "rejected": [{k: v for k, v in s.to_json().items() if k != "params"} for s in self.rejected],
                            "at_bounds": self.model.params_at_bounds(), "message": self.message}}
         if self.split is not None:
             out["split"] = self.split
@@ -175,7 +248,9 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
     tried: set[str] = set()
     screened = space.screened(dcfg)
     fits = 0
-    while (len([s for s in steps if s.kept]) < cfg.max_steps and fits < cfg.max_fits
+    pending: dict[str, list[Suspect]] = {}  # kept effect -> its step's look-alikes, to contest after the next kept step
+    confounded: list[dict] = []
+    while (_added(steps) < cfg.max_steps and fits < cfg.max_fits
            and current > dcfg.found_factor * floor):
         cands = [s for s in d.suspects if s.score >= dcfg.min_improvement and s.effect not in tried]
         if not cands:
@@ -204,15 +279,21 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
                 log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} {unit} (a look-alike of "
                     f"{fitted[0][1].effect}, which fits better)")
         after, sus, f = fitted[0]
-        kept = current - after >= max(cfg.min_gain * current, cfg.min_floor_drop * floor)
-        params = {k: round(float(v), 9) for k, v in f.params.items()}
-        steps.append(AutoStep(sus.effect, params, after, kept, d.verdict))
+        kept = current - after >= _bar_of(cfg, current, floor)
+        steps.append(AutoStep(sus.effect, _rounded(f.params), after, kept, d.verdict))
         log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} {unit} "
             + ("(kept)" if kept else "(rejected: within what noise allows)"))
         if not kept:
             continue
-        model, current = f.model, after
-        if current <= dcfg.found_factor * floor or len([s for s in steps if s.kept]) >= cfg.max_steps:
+        model, current, fits = _recontest(space, f.model, after, floor, pending, steps, confounded, cfg, fits,
+                                          d.verdict, screened, log)
+        # this step's look-alikes were fitted before the effects still missing are modelled, which
+        # can rank them either way (DROID-format data, a delay and softer gains: the delay fitted
+        # alone ends 50 % above the target filter, and 10x below it once the gains are in): each is
+        # contested again, best first, once a later step is kept
+        if len(fitted) > 1:
+            pending[sus.effect] = [s for _, s, _ in fitted[1:]]
+        if current <= dcfg.found_factor * floor or _added(steps) >= cfg.max_steps:
             break
         bar.set_description("auto: diagnosing")
         # the effects the last diagnosis had to re-screen from typical strengths (their parameters do
@@ -231,13 +312,21 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         verdict = "unexplained"
     details, note = space.details(d, model)
     details["searched_train"] = [t.name for t in space.train]
+    confounded = [c for c in confounded if _bare(c["effects"][0]) in model.names]
     msg = _message(verdict, nominal, current, floor, kept, model.params_at_bounds(),
                    unscreened(screened, tried | set(model.names), space.library()), dcfg.found_factor, unit)
+    msg += confounded_note(confounded, unit)
     if note and verdict != "at_floor":
         msg += "; " + note
     log(msg)
     return AutoResult(unit, nominal, kept, [s for s in steps if not s.kept], current, noise, floor, dcfg.found_factor,
-                      verdict, msg, model, details)
+                      verdict, msg, model, details, confounded=confounded)
+
+
+def confounded_note(confounded: list[dict], unit: str = "rad") -> str:
+    """A clause naming each kept effect and the look-alike that fits as well in its place, else ''."""
+    return "".join(f"; {a} or {b}: the data cannot tell them apart (held-out {ha:.2e} vs {hb:.2e} {unit}, each "
+                   f"fitted with the rest), {a} kept" for c in confounded for (a, b), (ha, hb) in [(c["effects"], c["heldout_rmse"])])
 
 
 def bounds_note(at_bounds: dict[str, str]) -> str:
@@ -253,7 +342,7 @@ def bounds_note(at_bounds: dict[str, str]) -> str:
 def _message(verdict: str, nominal: float, final: float, floor: float, kept: list[AutoStep],
              at_bounds: dict[str, str] | None = None, left_out: list[str] = (), found_factor: float = 1.5,
              unit: str = "rad") -> str:
-    chain = " -> ".join([f"nominal {nominal:.2e}"] + [f"+{s.effect} {s.heldout_rmse:.2e}" for s in kept]) + f" {unit}"
+    chain = " -> ".join([f"nominal {nominal:.2e}"] + [f"{step_label(s.to_json())} {s.heldout_rmse:.2e}" for s in kept]) + f" {unit}"
     if verdict == "at_floor":
         return (f"at the floor ({final:.2e} <= {found_factor:g}x {floor:.2e} {unit}): {chain}"
                 + bounds_note(at_bounds or {}))

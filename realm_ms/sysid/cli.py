@@ -239,6 +239,7 @@ def _fit(args) -> int:
 
 def _auto(args) -> int:
     from realm_ms.sysid import api
+    from realm_ms.sysid.auto import step_label
 
     _check_data(args.data)
     _check_outputs(args, files=("--out", "--json"))
@@ -251,7 +252,7 @@ def _auto(args) -> int:
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")
     for s in a["steps"]:
-        print(f"  + {s['effect']:<20} -> {s['heldout_rmse']:.3e} {u}")
+        print(f"  {step_label(s):<40} -> {s['heldout_rmse']:.3e} {u}")
     print(f"final {f['heldout_rmse']:.3e} {u}, noise floor {f['noise_floor']:.2e} {u}: {f['verdict']}")
     print(a["details"]["message"])
     if args.out:

@@ -131,7 +131,7 @@ def test_auto_json_schema_and_report(data, capsys, tmp_path):
                          "--out", tmp_path / "M.yaml", "--json", tmp_path / "a.json")
     assert code == 0, err
     a = json.loads((tmp_path / "a.json").read_text())
-    assert a["unit"] == "rad" and set(a["final"]) == {"heldout_rmse", "noise_floor", "verdict"}
+    assert a["unit"] == "rad" and set(a["final"]) == {"heldout_rmse", "noise_floor", "verdict", "confounded"}
     assert a["final"]["verdict"] in ("at_floor", "partially_explained", "unexplained")
     assert [s["effect"] for s in a["steps"]] == ["latency"]
     st = a["steps"][0]

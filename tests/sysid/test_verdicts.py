@@ -15,6 +15,56 @@ def _s(effect, before, after):
 CFG = DiagnoseConfig()
 
 
+class ScriptedSpace:
+    """A position-like space whose diagnoses and fits are scripted, for ``auto``'s loop: round k of
+    diagnosis returns ``rounds[k]`` (none after the last), and a fit of ``added`` on a model with
+    effects ``names`` ends at ``heldout(names, added)``, its model holding both."""
+
+    unit = "rad"
+    train: list = []
+
+    def __init__(self, nominal, rounds, heldout, noise=1e-4):
+        self.nominal, self.rounds, self.heldout, self.noise = nominal, rounds, heldout, noise
+        self.models, self.fitted = [], []
+
+    def replay_floor(self, cfg):
+        return cfg.replay_floor_rad
+
+    def screened(self, cfg):
+        return list(cfg.candidates)
+
+    def searching(self, budget_s):
+        return self
+
+    def library(self):
+        from realm_ms.agents.effects import EFFECTS
+
+        return list(EFFECTS)
+
+    def diagnose(self, model, cfg, log):
+        from types import SimpleNamespace
+
+        self.models.append(model)
+        k = len(self.models) - 1
+        return SimpleNamespace(baseline_heldout_rmse=self.nominal, noise_floor=self.noise, saturated_fraction=0.0,
+                               suspects=self.rounds[k] if k < len(self.rounds) else [], verdict="partially_explained",
+                               rescreened=[])
+
+    def fit_suspect(self, model, suspect, config, log):
+        from types import SimpleNamespace
+
+        from realm_ms.agents.effects import make_effect
+        from realm_ms.agents.robot_model import RobotModel
+
+        self.fitted.append(suspect.effect)
+        names = frozenset(model.names)
+        return SimpleNamespace(heldout_after=self.heldout(names, suspect.effect), params={f"{suspect.effect}.x": 1.0},
+                               model=RobotModel([make_effect(n) for n in sorted(names | {suspect.effect})]))
+
+    def details(self, diagnosis, model):
+        return {}, ""
+
+
 def test_found_only_at_the_floor():
     v, msg, floor = judge_verdict(5e-3, 1e-4, [_s("latency", 5e-3, 3e-4), _s("viscous_damping", 5e-3, 4e-3)], CFG)
     assert v == "found" and "found: latency" in msg
@@ -100,52 +150,15 @@ def test_auto_fits_the_look_alikes_of_the_top_suspect_and_keeps_the_best(coulomb
     none of the screened look-alikes does, LuGre friction (a look-alike the screening leaves out)
     is fitted last, but only when a screened one ends within 3x the floor: far above it (smooth
     friction at 3.3x) the costly LuGre fit is skipped, and the message says it was not screened."""
-    from types import SimpleNamespace
-
-    from realm_ms.agents.robot_model import RobotModel
     from realm_ms.sysid import auto as auto_mod
 
     held_after = {"coulomb_friction": coulomb_after, "smooth_friction": smooth_after, "latency": 0.52e-3,
                   "lugre_friction": lugre_after}
-    rounds = []
-    fitted = []
-
-    class Space:  # a position-like space whose diagnosis and fits are scripted
-        unit = "rad"
-        train: list = []
-
-        def replay_floor(self, cfg):
-            return cfg.replay_floor_rad
-
-        def screened(self, cfg):
-            return list(cfg.candidates)
-
-        def searching(self, budget_s):
-            return self
-
-        def library(self):
-            from realm_ms.agents.effects import EFFECTS
-
-            return list(EFFECTS)
-
-        def diagnose(self, model, cfg, log):
-            rounds.append(model)
-            sus = [] if len(rounds) > 1 else [_s("coulomb_friction", 5.6e-3, 0.6e-3), _s("smooth_friction", 5.6e-3, 0.7e-3),
-                                              _s("latency", 5.6e-3, 0.8e-3)]
-            if sus:
-                sus[0].confounded_with = ["smooth_friction"]
-            return SimpleNamespace(baseline_heldout_rmse=5.6e-3, noise_floor=1e-4, saturated_fraction=0.0,
-                                   suspects=sus, verdict="partially_explained", rescreened=[])
-
-        def fit_suspect(self, model, suspect, config, log):
-            fitted.append(suspect.effect)
-            return SimpleNamespace(heldout_after=held_after[suspect.effect], params={f"{suspect.effect}.x": 1.0},
-                                   model=RobotModel())
-
-        def details(self, diagnosis, model):
-            return {}, ""
-
-    out = auto_mod.auto(Space(), progress=False, log=lambda *a: None).to_json()
+    first = [_s("coulomb_friction", 5.6e-3, 0.6e-3), _s("smooth_friction", 5.6e-3, 0.7e-3), _s("latency", 5.6e-3, 0.8e-3)]
+    first[0].confounded_with = ["smooth_friction"]
+    space = ScriptedSpace(5.6e-3, [first], lambda names, added: held_after[added])
+    fitted = space.fitted
+    out = auto_mod.auto(space, progress=False, log=lambda *a: None).to_json()
     if coulomb_after < 0.4e-3:
         assert fitted == ["coulomb_friction"] and [s["effect"] for s in out["steps"]] == ["coulomb_friction"]
         return
@@ -248,3 +261,51 @@ def test_the_search_budget_takes_whole_train_trajectories_in_order_and_keeps_the
     held = [SimpleNamespace(name="h", duration=60.0)]
     sub = PositionSpace(trajs, held, evaluator=None).searching(20.0)
     assert [t.name for t in sub.train] == ["t0", "t2"] and sub.heldout is held
+
+
+@pytest.mark.parametrize("case,joint,max_fits", [("swap", 0.35e-3, 6), ("confounded", 2.80e-3, 6), ("stays", 4.0e-3, 6),
+                                                  ("budget", 0.35e-3, 5)])
+def test_auto_contests_an_earlier_look_alike_again_once_a_later_step_is_kept(case, joint, max_fits):
+    """A delay and softer gains: fitted alone first, the target ramp beats the target filter and the
+    delay; the gains are kept next (2.86 mrad). Then each look-alike is fitted in the ramp's place
+    with the gains refitted, best first: the filter, worse, leaves the ramp in place; the delay, far
+    better, takes it (a swap step; the run ends at the floor); as good within the keep bar, the pair
+    is named as confounded; clearly worse, the ramp stays. ``max_fits`` holds: with 5, the delay is
+    never contested."""
+    from realm_ms.sysid import auto as auto_mod
+
+    first = [_s("target_interpolation", 30e-3, 6.4e-3), _s("latency", 30e-3, 9.5e-3), _s("target_filter", 30e-3, 6.9e-3),
+             _s("gain_mismatch", 30e-3, 20e-3)]
+    first[0].confounded_with = ["latency", "target_filter"]
+    alone = {"target_interpolation": 6.36e-3, "latency": 9.46e-3, "target_filter": 7.2e-3}
+    with_gains = {"latency": joint, "target_filter": 5e-3}
+
+    def heldout(names, added):
+        return alone[added] if not names else 2.86e-3 if added == "gain_mismatch" else with_gains[added]
+
+    space = ScriptedSpace(30e-3, [first, [_s("gain_mismatch", 6.36e-3, 3e-3)]], heldout, noise=2e-4)
+    res = auto_mod.auto(space, progress=False, log=lambda *a: None, config=auto_mod.AutoConfig(max_fits=max_fits))
+    out = res.to_json()
+    assert space.fitted == ["target_interpolation", "latency", "target_filter", "gain_mismatch", "target_filter",
+                            "latency"][:max_fits]
+    labels = [auto_mod.step_label(s) for s in out["steps"]]
+    assert labels[:2] == ["+target_interpolation", "+gain_mismatch"]
+    assert {"effect": "target_filter", "heldout_rmse": 5e-3, "replaces": "target_interpolation"} in out["details"]["rejected"]
+    if case == "swap":
+        assert labels[2:] == ["latency for target_interpolation"] and out["steps"][2]["replaces"] == "target_interpolation"
+        assert sorted(res.model.names) == ["gain_mismatch", "latency"]
+        assert out["final"]["verdict"] == "at_floor" and out["final"]["confounded"] == []
+        assert "latency for target_interpolation 3.50e-04" in out["details"]["message"]
+        return
+    assert labels[2:] == [] and sorted(res.model.names) == ["gain_mismatch", "target_interpolation"]
+    assert out["final"]["verdict"] == "partially_explained"
+    if case == "budget":
+        assert all(r.get("replaces") != "target_interpolation" or r["effect"] != "latency" for r in out["details"]["rejected"])
+        return
+    assert {"effect": "latency", "heldout_rmse": joint, "replaces": "target_interpolation"} in out["details"]["rejected"]
+    if case == "confounded":
+        assert out["final"]["confounded"] == [{"effects": ["target_interpolation", "latency"],
+                                               "heldout_rmse": [2.86e-3, joint]}]
+        assert "target_interpolation or latency: the data cannot tell them apart" in out["details"]["message"]
+    else:
+        assert out["final"]["confounded"] == [] and "cannot tell" not in out["details"]["message"]

@@ -11,12 +11,14 @@ from realm_ms.sysid.report.sections import JOINTS, ReportData
 
 
 def auto_waterfall(d: ReportData):
+    from realm_ms.sysid.auto import step_label
+
     a = getattr(d, "auto", None)
     if not a:
         return "Auto waterfall", "<p>No <code>auto --json</code> given (pass <code>--auto AUTO.json</code>).</p>"
     unit = a.get("unit", "rad")
     scale, shown = (1e3, "mrad") if unit == "rad" else (1.0, unit)
-    labels = ["nominal"] + [f"+ {s['effect']}" for s in a["steps"]]
+    labels = ["nominal"] + [step_label(s) for s in a["steps"]]
     vals = np.array([a["nominal_heldout_rmse"]] + [s["heldout_rmse"] for s in a["steps"]])
     fin = a["final"]
     details = a.get("details") or {}
@@ -32,7 +34,7 @@ def auto_waterfall(d: ReportData):
     x.legend(fontsize=8)
     rows = [[lab, f"{v:.3e}", _ratio(v, floor)] for lab, v in zip(labels, vals)]
     for r in details.get("rejected", []):
-        rows.append([f"(rejected) {r['effect']}", f"{r['heldout_rmse']:.3e}", _ratio(r['heldout_rmse'], floor)])
+        rows.append([f"(rejected) {step_label(r).lstrip('+')}", f"{r['heldout_rmse']:.3e}", _ratio(r['heldout_rmse'], floor)])
     msg = details.get("message", "")
     head = f"<p>verdict <b>{esc(fin['verdict'])}</b>. {esc(msg)}</p>"
     return ("Auto: nominal → + effect → …", head + to_img(fig, "auto waterfall")
