@@ -161,8 +161,8 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
     trajs = data if isinstance(data, list) else load_dir(data, options=opts)
     if heldout is not None:
         trajs = trajs + load_dir(heldout, options=opts)
-    sp = _make_space(trajs, [], space, m, workers, device, identify=False)
-    return sp.compare(m, segment_s=segment_s)
+    with _make_space(trajs, [], space, m, workers, device, identify=False) as sp:
+        return sp.compare(m, segment_s=segment_s)
 
 
 def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print,
@@ -172,8 +172,8 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
 
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    sp = _make_space(train, held, space, m, workers, device)
-    d = sp.diagnose(m, DiagnoseConfig(**config), log=log, candidates=candidates)
+    with _make_space(train, held, space, m, workers, device) as sp:
+        d = sp.diagnose(m, DiagnoseConfig(**config), log=log, candidates=candidates)
     d.split = _split_block(train, held, seed)
     return d
 
@@ -197,8 +197,8 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    sp = _make_space(train, held, space, m, workers, device, progress)
-    res = sp.fit(m, FitConfig(add=add, seed=seed, **config), log=log)
+    with _make_space(train, held, space, m, workers, device, progress) as sp:
+        res = sp.fit(m, FitConfig(add=add, seed=seed, **config), log=log)
     res.model.provenance.update(_provenance(data, sp, train, held, res.effects, res.heldout_after))
     if out is not None:
         res.model.save(out)
@@ -221,8 +221,8 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
         check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    sp = _make_space(train, held, space, m, workers, device, progress)
-    res = _auto(sp, m, AutoConfig(seed=seed, **config), progress, log)
+    with _make_space(train, held, space, m, workers, device, progress) as sp:
+        res = _auto(sp, m, AutoConfig(seed=seed, **config), progress, log)
     swapped_out = {s.replaces for s in res.steps}
     res.model.provenance.update(_provenance(data, sp, train, held, [s.effect for s in res.steps if s.effect not in swapped_out],
                                             res.heldout_rmse))
@@ -240,11 +240,11 @@ def report(data, model=None, out: str | Path = "report.html", heldout=None, seed
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    sp = _make_space(train, held, space, m, workers, device)
-    return sp.report(m if model is not None else None, Path(out), str(data), log=log, waterfall=waterfall,
-                     diagnosis=_load_json(diagnosis, ("baseline", "suspects"), "diagnose --json"),
-                     fit_result=_load_json(fit_result, ("history", "before", "after"), "fit --json"),
-                     auto=_load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json"))
+    with _make_space(train, held, space, m, workers, device) as sp:
+        return sp.report(m if model is not None else None, Path(out), str(data), log=log, waterfall=waterfall,
+                         diagnosis=_load_json(diagnosis, ("baseline", "suspects"), "diagnose --json"),
+                         fit_result=_load_json(fit_result, ("history", "before", "after"), "fit --json"),
+                         auto=_load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json"))
 
 
 def align(data, model=None, out: str | Path = "align.html", command: str | None = None, waterfall: bool = True,

@@ -48,6 +48,16 @@ class PositionSpace:
         ev.progress = progress and sys.stderr.isatty()
         return cls(train, heldout, ev, progress)
 
+    def close(self) -> None:
+        """Stop the replay's worker processes (a verb's last step: ``with`` the space)."""
+        self.evaluator.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
     @staticmethod
     def replay_floor(cfg: DiagnoseConfig) -> float:
         return cfg.replay_floor_rad

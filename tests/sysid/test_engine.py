@@ -169,3 +169,18 @@ def test_equal_arms_are_simulated_once_and_then_come_from_the_cache():
     ev.cache = RolloutCache(max_bytes=1)
     np.testing.assert_allclose(ev.rollout(q0[:1], np.zeros_like(q0[:1]), cmd[:1], [fx1])[0], sim[0], atol=1e-6)
     assert ev.cache.misses == 1 and ev.cache.get(arm_keys(q0[:1], np.zeros_like(q0[:1]), cmd[:1], [fx1])[0]) is None
+
+
+def test_a_verb_stops_its_replay_workers_before_it_returns(tmp_path, monkeypatch):
+    """The verbs run their space `with`: the evaluator's worker processes are shut down when the verb
+    returns, not left to the interpreter's exit (where a pool's wake-up pipe could already be closed:
+    `OSError: [Errno 9] Bad file descriptor` after `realm sysid auto` had written its results)."""
+    from realm_ms.sysid import api
+    from realm_ms.sysid.synth import SynthConfig, synth
+
+    synth("none", tmp_path, SynthConfig(n_train=1, n_heldout=1, duration_s=2.0), evaluator=Evaluator(workers=1))
+    closed = []
+    close = Evaluator.close
+    monkeypatch.setattr(Evaluator, "close", lambda self: (closed.append(self), close(self)))
+    api.compare(tmp_path / "train", workers=1, device="cpu")
+    assert len(closed) == 1 and closed[0]._pool is None

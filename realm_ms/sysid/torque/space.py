@@ -157,6 +157,15 @@ class TorqueSpace:
         """No simulation: workers, device and progress do not apply."""
         return cls(train, heldout)
 
+    def close(self) -> None:
+        """Nothing to stop (no worker processes); the verbs use every space ``with``."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
     @staticmethod
     def suits(trajs: list[Trajectory]) -> bool:
         return all(t.tau is not None for t in trajs)
