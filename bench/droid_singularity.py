@@ -31,7 +31,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from realm_ms.agents.droid_action_spaces import DroidIK, cartesian_delta_to_velocity, cartesian_velocity_to_delta, pose_diff
     from realm_ms.sysid.alignment import read_droid_episodes, replay_closed_loop
-    from realm_ms.sysid.interaction import MIN_S, PAD_S, SINGULAR_SIGMA, _pad, _runs, sigma_min
+    from realm_ms.sysid.interaction import PAD_S, SINGULAR_SIGMA, _pad, _runs, held_samples, sigma_min
 
     try:
         eps, skipped = read_droid_episodes(args.data)
@@ -61,12 +61,12 @@ def main(argv=None) -> int:
         if m.any():
             row = f"[{lo:.2f}, {hi:.2f})   {m.sum():7d}  {np.median(miss_all[m]):.2f}"
             print(row + (f"{grow[m].mean():37.1f}" if grow is not None else ""))
-    min_len = int(np.ceil(MIN_S * 15 - 1e-9))
     pos = None if grow is None else np.clip(grow, 0.0, None)
     print("threshold  masked share  episodes" + ("  share of joint-error growth" if pos is not None else ""))
     for th in THRESHOLDS:
-        m = np.concatenate([_pad(_runs(s < th, min_len), e.traj.t, PAD_S) for s, e in zip(sig, eps)])
-        n_eps = sum(_runs(s < th, min_len).any() for s in sig)
+        runs = [_runs(s < th, held_samples(e.traj.rate_hz)) for s, e in zip(sig, eps)]  # as interaction.detect holds them
+        m = np.concatenate([_pad(r, e.traj.t, PAD_S) for r, e in zip(runs, eps)])
+        n_eps = sum(r.any() for r in runs)
         row = f"{th:9.2f}  {m.mean():12.1%}  {n_eps:8d}"
         print(row + (f"  {pos[m].sum() / pos.sum():.1%}" if pos is not None else ""))
     return 0

@@ -306,10 +306,10 @@ def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episode
     torch.set_num_threads(1)
     try:
         rc = realm([
-        "eval", "--policy", f"lerobot:{ckpt}", "--tasks", *r.tasks, "--perturbations", *perturbations,
-        "--episodes", str(episodes), "--seed", str(seed), "--max-steps", str(r.eval_max_steps),
-        "--replan-every", str(r.replan_every), "--workers", str(r.workers), "--camera-size", f"{r.width}x{r.height}",
-        "--device", r.device, "--out", str(run)])
+            "eval", "--policy", f"lerobot:{ckpt}", "--tasks", *r.tasks, "--perturbations", *perturbations,
+            "--episodes", str(episodes), "--seed", str(seed), "--max-steps", str(r.eval_max_steps),
+            "--replan-every", str(r.replan_every), "--workers", str(r.workers), "--camera-size", f"{r.width}x{r.height}",
+            "--device", r.device, "--out", str(run)])
     finally:
         torch.set_num_threads(threads)
     if rc != 0:

@@ -106,6 +106,11 @@ def _runs(flag: np.ndarray, min_len: int) -> np.ndarray:
     return out
 
 
+def held_samples(rate_hz: float) -> int:
+    """Samples a signature must hold: ``MIN_S`` at the log's rate, at least 2."""
+    return max(2, int(np.ceil(MIN_S * rate_hz - 1e-9)))
+
+
 def _pad(flag: np.ndarray, t: np.ndarray, pad_s: float) -> np.ndarray:
     idx = np.flatnonzero(flag)
     out = flag.copy()
@@ -117,7 +122,7 @@ def _pad(flag: np.ndarray, t: np.ndarray, pad_s: float) -> np.ndarray:
 def detect(tr: Trajectory, ik=None) -> Interaction:
     """Grasp, stall and (IK commands only) near-singular samples of one trajectory, widened by ``PAD_S``."""
     n = len(tr.t)
-    min_len = max(2, int(np.ceil(MIN_S * tr.rate_hz - 1e-9)))
+    min_len = held_samples(tr.rate_hz)
     grasp = np.zeros(n, bool)
     if tr.gripper is not None:
         g = tr.gripper

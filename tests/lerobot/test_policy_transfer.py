@@ -27,7 +27,6 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 TASK, SEED, W, H = "REALM-PushSwitch-v1", 3, 32, 24
-BIN = Path(sys.executable).parent
 
 
 def _run(cmd: list[str]) -> None:
