@@ -218,6 +218,7 @@ class RobotModel:
         """Parse and validate; every problem is a one-line ``ValueError`` naming ``where`` and the field."""
         if not isinstance(data, dict):
             raise InputError(f"{where}: expected a mapping at the top level, got {type(data).__name__}")
+        _check_keys(data, ("realm_ms_robot_model", "gains", "joint_physics", "physics_hz", "effects", "provenance"), where)
         version = data.get("realm_ms_robot_model", FORMAT_VERSION)
         if version != FORMAT_VERSION:
             raise InputError(f"{where}: format version {version} not supported (expected {FORMAT_VERSION})")
@@ -231,6 +232,7 @@ class RobotModel:
                 item = {"name": item}
             if not isinstance(item, dict) or "name" not in item:
                 raise InputError(f"{where}: effects[{i}]: expected a name or a mapping with 'name', got {item!r}")
+            _check_keys(item, ("name", "params", "config", "units"), f"{where}: effects[{i}]", "an effect")
             for key in ("params", "config"):
                 if item.get(key) is not None and not isinstance(item[key], dict):
                     raise InputError(f"{where}: effects[{i}].{key}: expected a mapping, got {item[key]!r}")
@@ -293,6 +295,18 @@ class RobotModel:
 
     def copy(self) -> "RobotModel":
         return RobotModel.from_dict(self.to_dict())
+
+
+def _check_keys(data: dict, known: tuple[str, ...], where: str, what: str = "a robot model") -> None:
+    """A key the loader does not read is an error, not ignored: a misspelt ``effect:`` would
+    otherwise load the nominal robot without a word."""
+    import difflib
+
+    unknown = [k for k in data if k not in known]
+    if unknown:
+        near = difflib.get_close_matches(str(unknown[0]), known, n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise InputError(f"{where}: unknown key {unknown[0]!r}{hint}; {what} has {', '.join(known)}")
 
 
 def load_robot_model(path_or_dict) -> RobotModel:

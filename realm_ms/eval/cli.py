@@ -168,13 +168,13 @@ def robot_model_kwargs(robot_model: str | None, flag: str = "--robot-model") -> 
     """``{"robot_model": ...}`` for a robot model that loads (checked here, before any env is built),
     ``{}`` for None (the nominal robot)."""
     from realm_ms.agents.robot_model import load_robot_model
-    from realm_ms.errors import UserError
+    from realm_ms.errors import InputError, UserError
 
     if robot_model is None:
         return {}
     try:
         load_robot_model(robot_model)
-    except (ValueError, FileNotFoundError) as e:
+    except (InputError, FileNotFoundError) as e:  # the loader's own complaints; any other error is a bug
         raise UserError(f"{flag} {robot_model}: {e}") from None
     return {"robot_model": robot_model}
 

@@ -53,6 +53,9 @@ def _model(tmp_path, text):
     ("effects: [{name: coulomb_friction, params: {fc: [0.1, 0.2, 0.3]}}]", r"fc: expected one number or a list of 7 \(one per joint\), got a list of 3"),
     ("effects: [{name: coulomb_friction, params: {fc3: [0.1, 0.2]}}]", r"fc3: expected a number, got a list of 2"),
     ("effects: [{name: coulomb_friction, params: {fc: abc}}]", r"fc: expected one number or a list of 7"),
+    # a misspelt key would otherwise load the nominal robot (or the effect's defaults) silently
+    ("effect: [latency]", r"unknown key 'effect' \(did you mean 'effects'\?\); a robot model has"),
+    ("effects: [{name: latency, param: {delay: 0.1}}]", r"effects\[0\]: unknown key 'param' \(did you mean 'params'\?\); an effect has"),
 ])
 def test_model_files_refused_with_one_line(tmp_path, text, msg):
     with pytest.raises(ValueError, match=msg) as e:
