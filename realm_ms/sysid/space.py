@@ -3,7 +3,8 @@
 A space is bound to the data (train and held-out trajectories) and answers the verbs in its own
 unit: ``compare``, ``diagnose``, ``fit``, ``report``, and, for ``auto``'s one loop (``auto.py``),
 ``fit_suspect`` (fit a ranked suspect onto the current model), ``details`` (what only this space
-reports), ``screened`` / ``library`` (which effects the diagnosis ranks / could rank) and
+reports), ``flange`` (the held-out flange figures of the start and final models, or why there are
+none), ``screened`` / ``library`` (which effects the diagnosis ranks / could rank) and
 ``replay_floor`` (its own error on a plant that matches it). ``api.py`` picks the space once
 (``SPACES``, ``pick``).
 
