@@ -71,17 +71,24 @@ def lab_of(name: str, labs: dict[str, str]) -> str:
     return labs.get(name) or name.rsplit("_", 1)[-1]
 
 
+def flange_command(tr, ik) -> np.ndarray:
+    """(T, 6) the flange pose a trajectory's command points at: its ``cartesian_position`` command
+    when it is replayed as one (``--command closed_loop``), else the flange pose (forward
+    kinematics) of its joint target (logged or rebuilt)."""
+    cmd = tr.meta.get("droid_command") or {}
+    if cmd.get("space") == "cartesian_position" and len(cmd["actions"]) == len(tr.t):
+        return np.asarray(cmd["actions"], float)
+    return ik.pose(tr.q_cmd)
+
+
 def episodes_from(trajs, labs: dict[str, str], ik=None) -> list[DroidEpisode]:
-    """``DroidEpisode`` per workbench trajectory: its ``cartesian_position`` command if it logs one
-    (``--command closed_loop``), else the flange pose of its joint target (logged or rebuilt)."""
+    """``DroidEpisode`` per workbench trajectory, commanded at ``flange_command``."""
     from realm_ms.agents.droid_action_spaces import DroidIK
 
     ik, out = ik or DroidIK(), []
     for tr in trajs:
-        cmd = tr.meta.get("droid_command") or {}
-        pose = cmd["actions"] if cmd.get("space") == "cartesian_position" else ik.pose(tr.q_cmd)
         g = tr.gripper if tr.gripper is not None else np.zeros(len(tr.t))
-        out.append(DroidEpisode(tr.name, lab_of(tr.name, labs), tr.q, np.asarray(pose, float), g,
+        out.append(DroidEpisode(tr.name, tr.meta.get("lab") or lab_of(tr.name, labs), tr.q, flange_command(tr, ik), g,
                                 float(tr.control_hz or 15.0), tr))
     return out
 
@@ -216,16 +223,96 @@ def compare_episode(ep: DroidEpisode, q_sim: np.ndarray, ik=None) -> EpisodeAlig
     from realm_ms.sysid.interaction import detect
 
     ik = ik or DroidIK()
-    p_real = ik.flange(ep.q)[:, :3, 3]
-    p_sim = ik.flange(q_sim)[:, :3, 3]
-    c = ep.cartesian_cmd[:, :3]
-    d = np.linalg.norm(p_sim - p_real, axis=1) * 1e3
     masked = detect(ep.traj, ik).masked if ep.traj is not None else np.zeros(ep.steps, bool)
+    return episode_metrics(ep.name, ep.lab, ep.q, q_sim, ep.cartesian_cmd[:, :3], masked, ik)
+
+
+def episode_metrics(name: str, lab: str, q: np.ndarray, q_sim: np.ndarray, c: np.ndarray, masked: np.ndarray, ik,
+                    stride: int = 1) -> EpisodeAlignment:
+    """The metrics of measured joints ``q`` beside simulated ``q_sim`` (T, 7) under commanded flange
+    positions ``c`` (T, 3); ``masked`` (T,) steps the free error leaves out; lag and b on every
+    ``stride``-th sample (one per command of a log faster than its commands)."""
+    p_real = ik.flange(q)[:, :3, 3]
+    p_sim = ik.flange(q_sim)[:, :3, 3]
+    d = np.linalg.norm(p_sim - p_real, axis=1) * 1e3
+    pr, ps, cs = p_real[::stride], p_sim[::stride], c[::stride]
     return EpisodeAlignment(
-        ep.name, ep.lab, ep.steps, float(np.median(d)), float(d.mean()),
-        [float(x) for x in np.median(np.abs(q_sim - ep.q), axis=0) * 1e3],
-        response_lag(p_real, c), response_lag(p_sim, c), response_b(p_real, c), response_b(p_sim, c),
+        name, lab, len(q), float(np.median(d)), float(d.mean()),
+        [float(x) for x in np.median(np.abs(q_sim - q), axis=0) * 1e3],
+        response_lag(pr, cs), response_lag(ps, cs), response_b(pr, cs), response_b(ps, cs),
         float(np.median(d[~masked])) if (~masked).any() else float("nan"), float(masked.mean()))
+
+
+# ---------------------------------------------------------------------------- beside a multiple-shooting replay
+#: why torque-space data has no flange figures
+TORQUE_SKIP = ("torque space: no commanded target (q_cmd) to measure lag and response against, and the "
+               "inverse-dynamics residual simulates no flange")
+
+
+@dataclass
+class FlangeComparison:
+    """The flange beside the joints for the workbench verbs: one ``AlignmentResult`` per replayed model
+    (``compare``: the model; ``fit`` and ``auto``: before and after, held-out), on the same
+    trajectories; ``skipped`` says why there is none."""
+
+    runs: list[AlignmentResult] = field(default_factory=list)
+    skipped: str = ""
+
+    def to_json(self) -> dict:
+        if self.skipped:
+            return {"skipped": self.skipped}
+        return _finite({"runs": [r.to_dict() for r in self.runs]})
+
+    def line(self) -> str:
+        """"flange: 14.2 -> 4.9 mm median (free 12.0 -> 4.1), lag 2 -> 4 (real 4), b 0.45 -> 0.21 (real 0.20)"."""
+        if self.skipped:
+            return f"flange: not measured ({self.skipped})"
+        o = [r.overall for r in self.runs]
+        chain = lambda key, fmt: " -> ".join(format(getattr(x, key), fmt) for x in o)  # noqa: E731
+        return (f"flange: {chain('flange_mm', '.1f')} mm median (free {chain('free_mm', '.1f')}), lag "
+                f"{chain('lag_sim', 'g')} (real {o[0].lag_real:g}), b {chain('b_sim', '.2f')} (real {o[0].b_real:.2f}) "
+                f"[{', '.join(r.model for r in self.runs)}; {o[0].episodes} trajectories, "
+                f"{len({e.lab for e in self.runs[0].episodes})} lab(s)]")
+
+
+def _finite(x):
+    """JSON-ready: NaN and inf as null."""
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    if isinstance(x, float) and not np.isfinite(x):
+        return None
+    return x
+
+
+def replay_flange(segset, runs: list[tuple[str, np.ndarray]], ik=None) -> FlangeComparison:
+    """Flange metrics of multiple-shooting replays (``replay.SegmentSet``; ``runs``: (label, simulated
+    q at the samples (N, L, 7)) per model), per trajectory over its scored windows (every sample
+    after the first burn-in, each once; segments restart from the measured state): the commanded
+    flange position is ``flange_command``'s; the free steps are the scored ones (not saturated,
+    grasping, stalled or near-singular); lag and b at the command rate. Labs: ``meta["lab"]``
+    (``index.json`` or the file's own, ``data_io``), else one group ``all``."""
+    from realm_ms.agents.droid_action_spaces import DroidIK
+
+    ik = ik or DroidIK()
+    per_traj: dict[int, list[tuple[int, np.ndarray]]] = {}
+    for i, s in enumerate(segset.segments):
+        per_traj.setdefault(s.traj, []).append((i, np.arange(s.score_from - s.start, s.stop - s.start)))
+    out = FlangeComparison()
+    cmds = {ti: flange_command(segset.trajs[ti], ik)[:, :3] for ti in per_traj}
+    for label, sim in runs:
+        rows = []
+        for ti, parts in per_traj.items():
+            tr = segset.trajs[ti]
+            idx = np.concatenate([segset.sample_idx[i, k] for i, k in parts])
+            q_sim = np.concatenate([sim[i, k] for i, k in parts])
+            free = np.concatenate([segset.mask[i, k] for i, k in parts])
+            stride = max(1, int(round(tr.rate_hz / tr.control_hz))) if tr.control_hz else 1
+            rows.append(episode_metrics(tr.name, tr.meta.get("lab") or "all", tr.q[idx], q_sim, cmds[ti][idx], ~free,
+                                        ik, stride))
+        out.runs.append(tabulate(rows, label, 0.0))
+    return out
 
 
 # ---------------------------------------------------------------------------- closed-loop replay
@@ -373,6 +460,6 @@ def write_workbench_npz(episodes: list[DroidEpisode], out_dir: str | Path) -> li
     for ep in episodes:
         p = Path(out_dir) / f"{ep.name}.npz"
         write_npz(p, Trajectory(ep.name, np.arange(ep.steps) / ep.control_hz, ep.q, rebuilt_joint_targets(ep, ik),
-                                gripper=ep.gripper, control_hz=ep.control_hz))
+                                gripper=ep.gripper, control_hz=ep.control_hz, meta={"lab": ep.lab}))
         paths.append(p)
     return paths

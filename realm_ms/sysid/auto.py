@@ -207,6 +207,7 @@ class AutoResult:
     split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
     # kept effects a look-alike fits as well in place of: [{"effects": [kept, look-alike], "heldout_rmse": [2]}]
     confounded: list[dict] = field(default_factory=list)
+    flange: object = None  # alignment.FlangeComparison: held-out flange mm, lag and b, start -> final model
 
     def to_json(self) -> dict:
         out = {"unit": self.unit, "nominal_heldout_rmse": self.nominal_heldout_rmse,
@@ -219,6 +220,8 @@ class AutoResult:
                            "at_bounds": self.model.params_at_bounds(), "message": self.message}}
         if self.split is not None:
             out["split"] = self.split
+        if self.flange is not None:
+            out["flange"] = self.flange.to_json()
         return out
 
 
@@ -229,6 +232,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
     dcfg = cfg.diagnose
     unit = space.unit
     model = (model or RobotModel()).copy()
+    start = model.copy()
     quiet = lambda *a: None  # noqa: E731
     bar = _bar(progress, cfg.max_fits)
     full, space = space, space.searching(cfg.search_s)
@@ -319,8 +323,9 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
     if note and verdict != "at_floor":
         msg += "; " + note
     log(msg)
+    flange = full.flange(start, model)
     return AutoResult(unit, nominal, kept, [s for s in steps if not s.kept], current, noise, floor, dcfg.found_factor,
-                      verdict, msg, model, details, confounded=confounded)
+                      verdict, msg, model, details, confounded=confounded, flange=flange)
 
 
 def confounded_note(confounded: list[dict], unit: str = "rad") -> str:

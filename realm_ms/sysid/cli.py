@@ -200,14 +200,16 @@ def _diagnose(args) -> int:
                 effect_class(name)
     _check_outputs(args, files=("--json",))
     _check_model(args)
-    d = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
-                     log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw).to_json()
+    res = api.diagnose(args.data, args.model, args.heldout, args.seed, args.workers, args.device,
+                       log=lambda m: print(m, file=sys.stderr), space=args.space, command=args.command, **kw)
+    d = res.to_json()
     from realm_ms.sysid.diagnose import UNIT_KEYS
 
     b, u = d["baseline"], d["unit"]
     sfx = UNIT_KEYS[u]
     print(f"baseline held-out RMSE {b[f'heldout_rmse_{sfx}']:.3e} {u}, noise floor ≈ {b[f'noise_floor_{sfx}']:.2e} {u}")
     print(d["message"])
+    print("held-out " + res.flange.line())
     for i, s in enumerate(d["suspects"][: args.top], 1):
         print(f"{i:2d}. {s['effect']:<20} score {s['score']:+.2f}  held-out RMSE after {s[f'heldout_rmse_after_{sfx}']:.2e} {u}")
         print(f"    {s['evidence']}")
@@ -244,10 +246,11 @@ def _auto(args) -> int:
     _check_data(args.data)
     _check_outputs(args, files=("--out", "--json"))
     _check_model(args)
-    a = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
-                 progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
-                 generations=args.generations, max_steps=args.max_steps, space=args.space,
-                 command=args.command, search_s=args.search_s).to_json()
+    res = api.auto(args.data, args.out, args.model, args.heldout, args.seed, args.workers, args.device,
+                   progress=not args.no_progress, log=lambda m: print(m, file=sys.stderr),
+                   generations=args.generations, max_steps=args.max_steps, space=args.space,
+                   command=args.command, search_s=args.search_s)
+    a = res.to_json()
     f = a["final"]
     u = a["unit"]
     print(f"nominal held-out RMSE {a['nominal_heldout_rmse']:.3e} {u}")
@@ -255,6 +258,7 @@ def _auto(args) -> int:
         print(f"  {step_label(s):<40} -> {s['heldout_rmse']:.3e} {u}")
     print(f"final {f['heldout_rmse']:.3e} {u}, noise floor {f['noise_floor']:.2e} {u}: {f['verdict']}")
     print(a["details"]["message"])
+    print("held-out " + res.flange.line())
     if args.out:
         print(f"model -> {args.out}")
     _write_json(args.json, a)

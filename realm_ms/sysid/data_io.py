@@ -60,7 +60,8 @@ def read_npz(path: Path) -> Trajectory:
                         "(commanded targets), or tau (T,7) (measured joint torque, for torque-space work)")
     return Trajectory(
         path.stem, data["t"], data["q"], data.get("q_cmd"), data.get("qd"), data.get("tau"),
-        data.get("gripper"), data.get("gripper_cmd"), data.get("control_hz"), meta={"file": str(path)},
+        data.get("gripper"), data.get("gripper_cmd"), data.get("control_hz"),
+        meta={"file": str(path), **({"lab": str(data["lab"])} if "lab" in data else {})},
     )
 
 
@@ -82,6 +83,8 @@ def write_npz(path: Path, traj: Trajectory) -> None:
             arrays[k] = v
     if traj.control_hz is not None:
         arrays["control_hz"] = np.float64(traj.control_hz)
+    if traj.meta.get("lab"):
+        arrays["lab"] = np.str_(traj.meta["lab"])
     atomic.write_npz(path, **arrays)
 
 
@@ -297,6 +300,7 @@ def load_each(path: str | Path, options=None, limits: np.ndarray | None = None) 
             out.append(validate(tr, limits, tr.meta.get("file") or f"{root.name}/{tr.name}"))
         except DataError as e:
             failed.append(e)
+    _tag_labs(out, root)
     if not failed:
         return out, []
     read = raw if raw is not None else trajs
@@ -314,6 +318,17 @@ def load_each(path: str | Path, options=None, limits: np.ndarray | None = None) 
     for line in skipped:
         warnings.warn(f"left out: {line}", DataWarning, stacklevel=2)
     return out, skipped
+
+
+def _tag_labs(trajs: list[Trajectory], root: Path) -> None:
+    """``meta["lab"]`` from an ``index.json`` beside the files (``alignment.read_labs``), where the
+    file names none of its own: the per-lab rows of the flange figures."""
+    from realm_ms.sysid.alignment import read_labs
+
+    labs = read_labs(root)
+    for tr in trajs:
+        if tr.name in labs:
+            tr.meta.setdefault("lab", labs[tr.name])
 
 
 def load_split(data: str | Path, heldout: str | Path | None = None, seed: int = 0,

@@ -33,6 +33,7 @@ import numpy as np
 
 from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
 from realm_ms.errors import InputError
+from realm_ms.sysid.alignment import replay_flange
 from realm_ms.sysid.optimize import Group, LinearStep, copy_effect, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.saturation import PAD_S
@@ -98,6 +99,7 @@ class Replayed:
     saturated_fraction: float = 0.0  # held-out samples in torque-saturated bursts (``saturation.py``)
     interaction_fraction: float = 0.0  # held-out samples in grasps/stalls/near-singular postures (``interaction.py``)
     masked: dict = field(default_factory=dict)  # trajectory name -> its grasp/stall/singular/masked shares
+    flange: object = None  # alignment.FlangeComparison of the baseline's held-out replay
 
 
 @dataclass
@@ -131,6 +133,13 @@ class Diagnosis:
     def saturated_fraction(self) -> float:
         return self.replayed.saturated_fraction if self.replayed else 0.0
 
+    @property
+    def flange(self):
+        """The baseline's held-out flange figures (``alignment.FlangeComparison``; torque space: none, and why)."""
+        from realm_ms.sysid.alignment import TORQUE_SKIP, FlangeComparison
+
+        return self.replayed.flange if self.replayed else FlangeComparison(skipped=TORQUE_SKIP)
+
     def to_json(self) -> dict:
         k = UNIT_KEYS[self.unit]
         baseline = {f"heldout_rmse_{k}": float(self.baseline_heldout_rmse), f"noise_floor_{k}": float(self.noise_floor),
@@ -146,6 +155,7 @@ class Diagnosis:
                              "interaction_fraction": round(float(r.interaction_fraction), 4),
                              "masked_per_trajectory": r.masked})
             out["features"] = r.features.to_dict()
+        out["flange"] = self.flange.to_json()
         if self.split is not None:
             out["split"] = self.split
         return out
@@ -227,7 +237,8 @@ def diagnose(train: list[Trajectory], heldout: list[Trajectory], model: RobotMod
     # the verdict (msg) is printed once, by the caller (CLI: on stdout)
     masked = {t.name: t.meta["interaction"] for t in train + heldout if "interaction" in t.meta}
     return Diagnosis(b_he.rmse, b_tr.rmse, floor, floor_j, np.sqrt(b_he.per_joint_mse[0]), suspects, msg, verdict, judge,
-                     replayed=Replayed(feats, he_ss.saturated_fraction, he_ss.interaction_fraction, masked),
+                     replayed=Replayed(feats, he_ss.saturated_fraction, he_ss.interaction_fraction, masked,
+                                       replay_flange(he_ss, [("baseline", b_he.sim[0])])),
                      rescreened=sc.rescreened)
 
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from realm_ms.errors import InputError
+from realm_ms.sysid.alignment import FlangeComparison, replay_flange
 from realm_ms.sysid.optimize import Group, GroupScores, cma_fit, confidence_intervals, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
@@ -63,6 +64,7 @@ class FitResult:
     cma_stop: str = ""
     noise_rmse: float | None = None
     split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
+    flange: FlangeComparison | None = None  # held-out flange mm, lag and b, before and after
     unit = "rad"
 
     @property
@@ -76,15 +78,19 @@ class FitResult:
                "linearized_start": self.gn_history, "at_bounds": self.model.params_at_bounds()}
         if self.split is not None:
             out["split"] = self.split
+        if self.flange is not None:
+            out["flange"] = self.flange.to_json()
         return out
 
     def lines(self) -> list[str]:
-        """The terminal summary: fitted values with units and bounds, per-joint held-out RMSE."""
+        """The terminal summary: fitted values with units and bounds, per-joint held-out RMSE, flange."""
         out = [f"  {k:<32} {v:.5g} {self.units[k]}   bounds {self.bounds[k]}" for k, v in self.params.items()]
         out.append("                     " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)) + "      all")
         for when, m in (("before", self.before), ("after", self.after)):
             out.append(f"{when:<6} held-out [rad] " + " ".join(f"{v:9.2e}" for v in m["per_joint_heldout_rmse_rad"])
                        + f"  {m['heldout_rmse_rad']:9.2e}   (train {m['train_rmse_rad']:.2e})")
+        if self.flange is not None:
+            out.append("held-out " + self.flange.line())
         return out + at_bounds_lines(self.model.params_at_bounds())
 
 
@@ -109,6 +115,7 @@ class CompareResult:
     interaction_fraction: float
     trajectories: list[dict]  # {name, rmse_rad, max_abs_error_rad, masked}
     error_over_time: list[tuple[str, float, float]]  # (trajectory, t, RMS over joints) per scored sample
+    flange: FlangeComparison | None = None  # flange mm, lag and b beside the real arm's, per trajectory and lab
     unit = "rad"
 
     def to_json(self) -> dict:
@@ -116,7 +123,7 @@ class CompareResult:
                 "per_joint_max_abs_error_rad": self.per_joint_max_abs_error, "noise_floor_rad": self.noise_floor,
                 "saturated_fraction": self.saturated_fraction, "interaction_fraction": self.interaction_fraction,
                 "noise_floor_per_joint_rad": self.noise_floor_per_joint, "trajectories": self.trajectories,
-                "error_over_time": self.error_over_time}
+                "error_over_time": self.error_over_time, "flange": self.flange.to_json() if self.flange else None}
 
     def lines(self) -> list[str]:
         """The terminal summary: per-joint RMSE and max error, masked samples, worst trajectories."""
@@ -132,6 +139,8 @@ class CompareResult:
                                    for t in self.trajectories if t.get("masked") and t["masked"]["masked"] > 0))
         worst = sorted(self.trajectories, key=lambda t: -(t["rmse_rad"] or 0))[:3]
         out.append("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
+        if self.flange is not None:
+            out.append(self.flange.line())
         return out
 
 
@@ -217,8 +226,9 @@ def fit(train: list[Trajectory], heldout: list[Trajectory], model: RobotModel | 
     params = {p.key: float(v) for p, v in zip(group.params, group.params.from_unit(group.u))}
     units = {p.key: p.unit for p in group.params}
     bounds = {p.key: [p.spec.lo, p.spec.hi] for p in group.params}
+    flange = replay_flange(he_ss, [("before", b_he.sim[0]), ("after", a_he.sim[0])])
     return FitResult(out_model, [fx.name for fx in fitted], params, before, after, res.history, gn_hist, units, bounds,
-                     uncertainty, res.stop, noise)
+                     uncertainty, res.stop, noise, flange=flange)
 
 
 def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: float = 8.0, burn_in_s: float = 1.0,
@@ -251,4 +261,5 @@ def compare(data: list[Trajectory], model: RobotModel | None = None, segment_s: 
     allres = res[ss.mask]
     return CompareResult(float(np.sqrt(np.mean(allres**2))), [float(x) for x in np.sqrt(np.mean(allres**2, axis=0))],
                          [float(x) for x in np.max(np.abs(allres), axis=0)], floor, [float(x) for x in floor_j],
-                         ss.saturated_fraction, ss.interaction_fraction, per_traj, over_time)
+                         ss.saturated_fraction, ss.interaction_fraction, per_traj, over_time,
+                         replay_flange(ss, [("model" if model.effects else "nominal", sim)]))

@@ -3,7 +3,8 @@
 A space is bound to the data (train and held-out trajectories) and answers the verbs in its own
 unit: ``compare``, ``diagnose``, ``fit``, ``report``, and, for ``auto``'s one loop (``auto.py``),
 ``fit_suspect`` (fit a ranked suspect onto the current model), ``details`` (what only this space
-reports), ``screened`` / ``library`` (which effects the diagnosis ranks / could rank) and
+reports), ``flange`` (the held-out flange figures of the start and final models, or why there are
+none), ``screened`` / ``library`` (which effects the diagnosis ranks / could rank) and
 ``replay_floor`` (its own error on a plant that matches it). ``api.py`` picks the space once
 (``SPACES``, ``pick``).
 
@@ -122,6 +123,23 @@ class PositionSpace:
     def details(self, diagnosis: Diagnosis, model: RobotModel) -> tuple[dict, str]:
         """``auto``'s space-specific details (held-out samples simulated but not scored) and note."""
         return {"saturated_fraction": round(float(diagnosis.saturated_fraction), 4)}, ""
+
+    def flange(self, start: RobotModel, final: RobotModel):
+        """``auto``'s flange figures: the held-out replay of its start and final models (``alignment.replay_flange``)."""
+        import numpy as np
+
+        from realm_ms.sysid.alignment import replay_flange
+        from realm_ms.sysid.optimize import Group, evaluate_groups
+        from realm_ms.sysid.replay import SegmentSet
+
+        cfg = DiagnoseConfig()
+        ss = SegmentSet.build(self.heldout, start.physics_hz, cfg.segment_s, cfg.burn_in_s, gains=start.gains)
+        runs = []
+        for label, m in (("nominal" if not start.effects else "start", start), ("final", final)):
+            ((r,),) = evaluate_groups(self.evaluator, [ss], sorted(m.effects, key=lambda f: f.order), [Group.of([])],
+                                      [np.zeros((1, 0))])
+            runs.append((label, r.sim[0]))
+        return replay_flange(ss, runs)
 
     def report(self, model: RobotModel | None, out: Path, data_name: str, auto=None, diagnosis=None, fit_result=None,
                waterfall: bool = True, log=print) -> Path:

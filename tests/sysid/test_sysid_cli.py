@@ -54,6 +54,12 @@ def test_compare(data, capsys, tmp_path):
     assert len(c["per_joint_rmse_rad"]) == 7 and c["noise_floor_rad"] > 0 and c["error_over_time"]
     names = json.loads((data / "synth.json").read_text())["config"]
     assert len(c["trajectories"]) == names["n_train"] + names["n_heldout"]
+    # the flange beside the joints: one run, a row per trajectory, one lab (synth writes no index.json)
+    (run_,) = c["flange"]["runs"]
+    assert len(run_["episodes"]) == len(c["trajectories"]) and [lab["lab"] for lab in run_["labs"]] == ["all"]
+    o = run_["overall"]
+    assert o["flange_mm"] > 0 and o["lag_real"] >= 0 and o["lag_sim"] >= 0 and 0 < o["b_real"] < 1.5
+    assert f"flange: {o['flange_mm']:.1f} mm median" in out
 
 
 @pytest.fixture(scope="module")
@@ -75,6 +81,8 @@ def test_diagnose_json_schema(data, capsys, outdir):
     scores = [s["score"] for s in d["suspects"]]
     assert scores == sorted(scores, reverse=True)
     assert d["suspects"][0]["effect"] == "latency" and d["missing_effect_found"]
+    (base,) = d["flange"]["runs"]
+    assert base["model"] == "baseline" and len(base["episodes"]) == 2 and f"flange: {base['overall']['flange_mm']:.1f}" in out
 
 
 def test_fit_json_schema_model_and_report(data, capsys, tmp_path, outdir):
@@ -92,6 +100,9 @@ def test_fit_json_schema_model_and_report(data, capsys, tmp_path, outdir):
     assert f["cma_stop"] == "max_generations" and f["noise_rmse_rad"] > 0
     assert f["after"]["heldout_rmse_rad"] < 0.2 * f["before"]["heldout_rmse_rad"]
     assert f["params"]["latency.delay"] == pytest.approx(0.02, rel=0.2)
+    before, after = (r["overall"] for r in f["flange"]["runs"])
+    assert after["flange_mm"] < 0.5 * before["flange_mm"] and before["lag_real"] == after["lag_real"]
+    assert f"flange: {before['flange_mm']:.1f} -> {after['flange_mm']:.1f} mm median" in out
     from realm_ms.sysid import load_actuation_model
 
     assert [s.name for s in load_actuation_model(model).stages] == ["latency"]
@@ -104,6 +115,46 @@ def test_fit_json_schema_model_and_report(data, capsys, tmp_path, outdir):
                   "Residual vs velocity", "Cross-correlation", "Hysteresis", "Fit history"):
         assert title in text, title
     assert text.count("data:image/png;base64,") >= 6 and "section failed" not in text
+    # the flange tables: per lab (one group and the overall row) and per trajectory, nominal beside the model
+    labs, trajs = _tables_after(text, "Flange: simulated beside real")[:2]
+    assert [r[0] for r in labs[1:]] == ["all", "all"] and "model: mm" in labs[0]
+    assert len(trajs) - 1 == 5 and sum(r[0].endswith("(held-out)") for r in trajs[1:]) == 2
+    assert all(float(r[trajs[0].index("model mm")]) < float(r[trajs[0].index("nominal mm")]) for r in trajs[1:])
+
+
+def _tables_after(html: str, heading: str) -> list[list[list[str]]]:
+    """The tables (rows of cell texts, the header first) of the section titled ``heading``."""
+    from html.parser import HTMLParser
+
+    class Tables(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.tables, self.cell, self.on = [], None, False
+
+        def handle_starttag(self, tag, attrs):
+            if tag == "h2":
+                self.on = None
+            elif self.on and tag == "table":
+                self.tables.append([])
+            elif self.on and tag == "tr":
+                self.tables[-1].append([])
+            elif self.on and tag in ("td", "th"):
+                self.cell = ""
+
+        def handle_endtag(self, tag):
+            if self.on and tag in ("td", "th"):
+                self.tables[-1][-1].append(self.cell.strip())
+                self.cell = None
+
+        def handle_data(self, data):
+            if self.on is None:
+                self.on = data.strip().startswith(heading)
+            elif self.cell is not None:
+                self.cell += data
+
+    p = Tables()
+    p.feed(html)
+    return p.tables
 
 
 @pytest.mark.parametrize("argv, msg", [
@@ -140,6 +191,8 @@ def test_auto_json_schema_and_report(data, capsys, tmp_path):
     fc = a["friction_curve"]
     assert len(fc["qd"]) == len(fc["tau"]) and all(len(r) == 7 for r in fc["tau"])
     assert "auto" in out or "final" in out
+    start, final = (r["overall"] for r in a["flange"]["runs"])
+    assert final["flange_mm"] < start["flange_mm"] and f"-> {final['flange_mm']:.1f} mm median" in out
     code, out, err = run(capsys, "report", data, "--model", tmp_path / "M.yaml", "--auto", tmp_path / "a.json",
                          "--out", tmp_path / "r.html", "--workers", 1, "--no-waterfall")
     assert code == 0, err

@@ -105,6 +105,9 @@ def test_cli_torque_space_and_tracking_effects_need_q_cmd(friction, tmp_path, ca
     assert code == 0, out.err
     f = json.loads((tmp_path / "f.json").read_text())
     assert f["unit"] == "N·m" and f["after"]["heldout_rmse_nm"] < 0.6 * f["before"]["heldout_rmse_nm"]
+    # no flange figures in torque space, and the reason, in the JSON and the printed summary
+    assert set(f["flange"]) == {"skipped"} and "no commanded target" in f["flange"]["skipped"]
+    assert "flange: not measured (torque space" in out.out
     from realm_ms.agents.robot_model import RobotModel
 
     assert RobotModel.load(tmp_path / "m.yaml").names == ["coulomb_friction"]

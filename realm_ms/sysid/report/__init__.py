@@ -1,6 +1,7 @@
 """``realm sysid report``: one self-contained HTML page (PNG figures embedded as base64).
 
-Sections (``sections.py``, one function each, in ``SECTIONS`` order): overview error table, where the
+Sections (``sections.py``, one function each, in ``SECTIONS`` order): overview error table, the
+flange error, lag and response per lab and per trajectory (``alignment.replay_flange``), where the
 model fails (conditions and time windows), suspects table, waterfall of held-out error as the
 model's effects are added one at a time and with each one left out, fitted parameters with
 units/bounds and 95 % confidence intervals (from ``fit --json``), fit history,
@@ -100,7 +101,7 @@ def build_report(train, heldout, model, out: Path, evaluator, diagnosis=None, fi
         diagnosis = diagnose(train, heldout, model, evaluator=evaluator, log=log).to_json()
     d.diagnosis = diagnosis
     sections = []
-    for fn in SECTIONS[:4] + [auto_waterfall, friction_curves] + SECTIONS[4:]:
+    for fn in SECTIONS[:5] + [auto_waterfall, friction_curves] + SECTIONS[5:]:
         try:
             sections.append(fn(d))
         except Exception as e:  # noqa: BLE001 - one failing plot must not lose the whole report

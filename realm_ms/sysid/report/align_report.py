@@ -35,6 +35,11 @@ class ModelRun:
     overall: object = None  # alignment.LabAlignment named "all"
     labs: list = field(default_factory=list)
 
+    @classmethod
+    def of(cls, res, sims: list[np.ndarray] | None = None) -> "ModelRun":
+        """The run of an ``alignment.AlignmentResult`` (``sims``: its simulated joints, for the overlays)."""
+        return cls(res.model, sims or [], res.episodes, [r.free_mm for r in res.episodes], res.overall, res.labs)
+
 
 def response_time_ms(b: float, hz: float = 15.0) -> float:
     """First-order time constant of a per-step response b: the time to 63 % of a step."""
@@ -49,8 +54,7 @@ def run_model(label: str, episodes, model) -> ModelRun:
 
     sims = replay_closed_loop(episodes, model)
     ik = DroidIK()
-    res = tabulate([compare_episode(e, s, ik) for e, s in zip(episodes, sims)], label, 0.0)
-    return ModelRun(label, sims, res.episodes, [r.free_mm for r in res.episodes], res.overall, res.labs)
+    return ModelRun.of(tabulate([compare_episode(e, s, ik) for e, s in zip(episodes, sims)], label, 0.0), sims)
 
 
 def waterfall_models(model):

@@ -328,4 +328,33 @@ def fit_health(d: ReportData):
     return "Fit history: the error falling, before/after per joint", note + to_img(fig, "fit history")
 
 
-SECTIONS = [overview, where_it_fails, suspects, waterfall, parameters, fit_health, overlays, residual_scatter, xcorr, hysteresis]
+def flange(d: ReportData):
+    """Flange mm, lag and b per lab and per trajectory (train and held-out), nominal beside the model,
+    with the tables of the alignment page (``report/align_report.py``)."""
+    from realm_ms.sysid.alignment import replay_flange, tabulate
+    from realm_ms.sysid.report.align_report import ModelRun, _episodes, _labs
+
+    pairs = [("nominal", d.nominal_train, d.nominal_held), (d.model_name, d.model_train, d.model_held)]
+    runs = []
+    for label, train, held in pairs[: 1 if d.model_name == "nominal" else 2]:
+        (he,) = replay_flange(held.segset, [(label, held.sim)]).runs
+        (tr,) = replay_flange(train.segset, [(label, train.sim)]).runs
+        for e in he.episodes:
+            e.name += " (held-out)"
+        runs.append(ModelRun.of(tabulate(he.episodes + tr.episodes, label, 0.0)))
+    singular = {t.name: t.meta.get("interaction", {}).get("singular", 0.0)
+                for t in d.model_held.segset.trajs + d.model_train.segset.trajs}
+    shares = [{"masked": e.masked, "singular": singular.get(e.name.removesuffix(" (held-out)"), 0.0)} for e in runs[0].rows]
+    intro = ("<p>The replay above seen at the flange (<code>panda_link8</code>, forward kinematics of q): flange error "
+             "|p<sub>sim</sub> − p<sub>real</sub>| in mm (median over the scored samples; <i>free</i>: the samples not "
+             "saturated, grasping, stalled or near-singular), and against the command's flange target (the Cartesian "
+             "command when it is replayed as one, else the pose of the joint target), the lag (commands after which "
+             "the flange is closest to where a command pointed) and the first-order response b "
+             "(p[t+1] − p[t] = b (c[t] − p[t])) of the simulated and the real arm. Labs: <code>index.json</code> "
+             "beside the data or the file's own <code>lab</code>, else one group.</p>")
+    return ("Flange: simulated beside real, per lab and per trajectory",
+            intro + "<h3>Per lab</h3>" + _labs(runs)[1] + "<h3>Per trajectory (worst first under the nominal robot)</h3>"
+            + _episodes(runs, shares)[1])
+
+
+SECTIONS = [overview, flange, where_it_fails, suspects, waterfall, parameters, fit_health, overlays, residual_scatter, xcorr, hysteresis]

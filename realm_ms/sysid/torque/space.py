@@ -37,14 +37,22 @@ class TorqueCompare:
     def to_json(self) -> dict:
         return {"unit": UNIT, "rmse_nm": self.rmse, "per_joint_rmse_nm": self.per_joint_rmse,
                 "noise_floor_nm": self.noise_floor, "noise_floor_per_joint_nm": self.noise_floor_per_joint,
-                "samples": self.samples, "residual_bands": self.residual_bands}
+                "samples": self.samples, "residual_bands": self.residual_bands, "flange": no_flange().to_json()}
 
     def lines(self) -> list[str]:
         """The terminal summary: residual RMSE per joint and by frequency band."""
         return [f"torque space ({self.samples} samples): inverse-dynamics residual RMSE {self.rmse:.3e} N·m, "
                 f"noise floor ≈ {self.noise_floor:.2e} N·m",
                 "joint       " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)),
-                "RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in self.per_joint_rmse)] + band_lines(self.residual_bands)
+                "RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in self.per_joint_rmse)] + band_lines(self.residual_bands) \
+            + [no_flange().line()]
+
+
+def no_flange():
+    """Torque space's flange figures: none, and why (``alignment.TORQUE_SKIP``)."""
+    from realm_ms.sysid.alignment import TORQUE_SKIP, FlangeComparison
+
+    return FlangeComparison(skipped=TORQUE_SKIP)
 
 
 @dataclass
@@ -69,7 +77,7 @@ class TorqueFit:
     def to_json(self) -> dict:
         out = {"unit": UNIT, "effects": self.effects, "params": self.params, "before": self.before, "after": self.after,
                "noise_floor_nm": self.noise_floor, "residual_bands": self.residual_bands,
-               "at_bounds": self.model.params_at_bounds()}
+               "at_bounds": self.model.params_at_bounds(), "flange": no_flange().to_json()}
         if self.split is not None:
             out["split"] = self.split
         return out
@@ -82,7 +90,7 @@ class TorqueFit:
         for when, m in (("before", self.before), ("after", self.after)):
             out.append(f"{when:<6} held-out [N·m] " + " ".join(f"{v:9.3f}" for v in m["per_joint_heldout_rmse_nm"])
                        + f"  {m['heldout_rmse_nm']:9.3f}   (train {m['train_rmse_nm']:.3f})")
-        return out + band_lines(self.residual_bands) + at_bounds_lines(self.model.params_at_bounds())
+        return out + band_lines(self.residual_bands) + [no_flange().line()] + at_bounds_lines(self.model.params_at_bounds())
 
 
 def band_lines(b: dict) -> list[str]:
@@ -303,6 +311,10 @@ class TorqueSpace:
         params = {f"{t.name}.{k}": round(v, 9) for t in terms for k, v in t.values.items()}
         after = {"heldout_rmse_nm": rmse(he, terms)[0]}
         return TorqueFit(model_of(terms, model), terms, [t.name for t in terms], params, {}, after, self.floor(he), {})
+
+    def flange(self, start, final):
+        """``auto``'s flange figures: none in torque space (``no_flange``)."""
+        return no_flange()
 
     def details(self, diagnosis, model) -> tuple[dict, str]:
         """``auto``'s space-specific details and a note on what is left (high-frequency residual)."""
