@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from realm_ms.sysid.data_io import read_labs
+
 #: largest lag (control steps) searched for
 MAX_LAG = 10
 #: every ``HELDOUT_EVERY``-th episode of a lab (by episode index, starting at the third) is held out
@@ -49,21 +51,6 @@ class DroidEpisode:
     @property
     def steps(self) -> int:
         return len(self.q)
-
-
-def read_labs(root: Path) -> dict[str, str]:
-    """Episode name (file stem) -> lab from ``index.json`` (``[{file, lab}, ...]``) in ``root`` or its
-    parent; {} when there is none."""
-    from realm_ms.sysid.timeseries import DataError
-
-    root = root if root.is_dir() else root.parent
-    for index in (root / "index.json", root.parent / "index.json"):
-        if index.is_file():
-            try:
-                return {Path(e["file"]).stem: str(e.get("lab", "?")) for e in json.loads(index.read_text())}
-            except (ValueError, KeyError, TypeError):
-                raise DataError(f"{index}: expected a JSON list of {{file, lab}} entries") from None
-    return {}
 
 
 def lab_of(name: str, labs: dict[str, str]) -> str:

@@ -320,11 +320,22 @@ def load_each(path: str | Path, options=None, limits: np.ndarray | None = None) 
     return out, skipped
 
 
-def _tag_labs(trajs: list[Trajectory], root: Path) -> None:
-    """``meta["lab"]`` from an ``index.json`` beside the files (``alignment.read_labs``), where the
-    file names none of its own: the per-lab rows of the flange figures."""
-    from realm_ms.sysid.alignment import read_labs
+def read_labs(root: Path) -> dict[str, str]:
+    """Episode name (file stem) -> lab from ``index.json`` (``[{file, lab}, ...]``) in ``root`` or its
+    parent; {} when there is none."""
+    root = root if root.is_dir() else root.parent
+    for index in (root / "index.json", root.parent / "index.json"):
+        if index.is_file():
+            try:
+                return {Path(e["file"]).stem: str(e.get("lab", "?")) for e in json.loads(index.read_text())}
+            except (ValueError, KeyError, TypeError):
+                raise DataError(f"{index}: expected a JSON list of {{file, lab}} entries") from None
+    return {}
 
+
+def _tag_labs(trajs: list[Trajectory], root: Path) -> None:
+    """``meta["lab"]`` from an ``index.json`` beside the files (``read_labs``), where the
+    file names none of its own: the per-lab rows of the flange figures."""
     labs = read_labs(root)
     for tr in trajs:
         if tr.name in labs:
