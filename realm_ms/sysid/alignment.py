@@ -22,7 +22,6 @@ Per-lab rows are medians over the lab's episodes. The arm alone is replayed: the
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
