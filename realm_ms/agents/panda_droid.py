@@ -106,6 +106,12 @@ class PandaDroid(BaseAgent):
             raise InputError("robot_model needs the droid_joint_pos control mode")
         arm.set_robot_model(model)
         model.build(self.robot, arm.active_joint_indices.tolist())
+        # the gripper's own response acts on the gripper controller of every control mode
+        response = next((s for s in model.stages if getattr(s, "name", None) == "gripper_response"), None)
+        for mode in self.controllers.values():
+            grip = mode.controllers.get("gripper") if hasattr(mode, "controllers") else None
+            if grip is not None:
+                grip.set_response(response.law() if response is not None else None)
 
     # ------------------------------------------------------------------ sensors
     @property
