@@ -104,10 +104,12 @@ class PandaDroid(BaseAgent):
         arm = self.controllers["droid_joint_pos"].controllers["arm"] if "droid_joint_pos" in self.controllers else None
         if arm is None:
             raise InputError("robot_model needs the droid_joint_pos control mode")
+        # the gripper's own response acts on the gripper controller of every control mode, not on the
+        # arm (an arm with stages runs the driver's slower path: give it none it does not need)
+        response = next((s for s in model.stages if getattr(s, "name", None) == "gripper_response"), None)
+        model = ActuationModel([s for s in model.stages if s is not response])
         arm.set_robot_model(model)
         model.build(self.robot, arm.active_joint_indices.tolist())
-        # the gripper's own response acts on the gripper controller of every control mode
-        response = next((s for s in model.stages if getattr(s, "name", None) == "gripper_response"), None)
         for mode in self.controllers.values():
             grip = mode.controllers.get("gripper") if hasattr(mode, "controllers") else None
             if grip is not None:

@@ -59,6 +59,7 @@ class GripperLaw:
     def __init__(self, delay=0.0, speed=1.0, tau=0.0):
         self.delay, self.speed, self.tau = delay, speed, tau
         self._hist = None
+        self._consts = None
 
     def reset(self, target: torch.Tensor) -> None:
         """Start at rest on ``target`` (B, n): the history, the rate limiter and the lag."""
@@ -66,27 +67,35 @@ class GripperLaw:
         self._ramp = target.clone()
         self._out = target.clone()
 
+    def _constants(self, like: torch.Tensor, dt: float, max_speed: float):
+        """Per (dt, max_speed): history rows and weight of the delayed request, step limit, lag factor."""
+        key = (dt, max_speed, like.dtype, like.device)
+        if self._consts is None or self._consts[0] != key:
+            kw = dict(dtype=like.dtype, device=like.device)
+            steps = (torch.as_tensor(self.delay, **kw) / dt).clamp(0, self._hist.shape[0] - 2)
+            k = torch.floor(steps)
+            tau = torch.as_tensor(self.tau, **kw)
+            alpha = torch.where(tau > 0, -torch.expm1(-dt / tau.clamp_min(1e-9)), torch.ones_like(tau))
+            max_dq = torch.as_tensor(self.speed, **kw) * (max_speed * dt)
+            self._consts = (key, k.long().reshape(-1), (steps - k), max_dq, alpha)
+        return self._consts[1:]
+
     def step(self, goal: torch.Tensor, dt: float, max_speed: float) -> torch.Tensor:
-        if self._hist is None:
+        if self._hist is None:  # a ring of requests, one per physics step; row ``_head`` is the newest
             n = int(math.ceil(GripperResponse.param_specs(None)[0].hi / dt)) + 2
             self._hist = self._ramp.unsqueeze(0).repeat(n, *([1] * self._ramp.dim()))
-        self._hist = torch.roll(self._hist, 1, dims=0)
-        self._hist[0] = goal
-        steps = torch.as_tensor(self.delay, dtype=goal.dtype, device=goal.device) / dt
-        steps = steps.clamp(0, self._hist.shape[0] - 2)
-        if steps.dim() == 0:
-            k = int(steps)
-            frac = steps - k
-            delayed = self._hist[k] + frac * (self._hist[k + 1] - self._hist[k])
+            self._head = 0
+        n = self._hist.shape[0]
+        self._head = (self._head - 1) % n
+        self._hist[self._head] = goal
+        k, frac, max_dq, alpha = self._constants(goal, dt, max_speed)
+        if k.numel() == 1:
+            a, b = self._hist[(self._head + int(k)) % n], self._hist[(self._head + int(k) + 1) % n]
         else:  # one delay per row (B, 1)
-            k = torch.floor(steps).long()[:, 0]
             rows = torch.arange(goal.shape[0], device=goal.device)
-            frac = steps - k[:, None]
-            delayed = self._hist[k, rows] + frac * (self._hist[k + 1, rows] - self._hist[k, rows])
-        max_dq = torch.as_tensor(self.speed, dtype=goal.dtype, device=goal.device) * (max_speed * dt)
+            a, b = self._hist[(self._head + k) % n, rows], self._hist[(self._head + k + 1) % n, rows]
+        delayed = a + frac * (b - a)
         self._ramp = self._ramp + torch.clamp(delayed - self._ramp, -max_dq, max_dq)
-        tau = torch.as_tensor(self.tau, dtype=goal.dtype, device=goal.device)
         # exact for a target held over the step; tau = 0 passes the ramp through
-        alpha = torch.where(tau > 0, -torch.expm1(-dt / tau.clamp_min(1e-9)), torch.ones_like(tau))
         self._out = self._out + alpha * (self._ramp - self._out)
         return self._out
