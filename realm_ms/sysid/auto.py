@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from realm_ms.agents.robot_model import RobotModel
+from realm_ms.sysid.gripper import gripper_json
 from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judging_floor, times_floor, unscreened, unscreened_note
 
 #: velocity grid of the reported friction curve: +-0.05 ... 1.5 rad/s
@@ -207,6 +208,7 @@ class AutoResult:
     split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
     # kept effects a look-alike fits as well in place of: [{"effects": [kept, look-alike], "heldout_rmse": [2]}]
     confounded: list[dict] = field(default_factory=list)
+    gripper: object = None  # the gripper row (``sysid/gripper.GripperCheck``), set by the API when the data has one
 
     def to_json(self) -> dict:
         out = {"unit": self.unit, "nominal_heldout_rmse": self.nominal_heldout_rmse,
@@ -219,7 +221,7 @@ class AutoResult:
                            "at_bounds": self.model.params_at_bounds(), "message": self.message}}
         if self.split is not None:
             out["split"] = self.split
-        return out
+        return out | gripper_json(self.gripper)
 
 
 def auto(space, model: RobotModel | None = None, config: AutoConfig | None = None, progress: bool = True,

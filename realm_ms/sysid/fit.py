@@ -20,6 +20,7 @@ from realm_ms.sysid.optimize import Group, GroupScores, cma_fit, confidence_inte
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
+from realm_ms.sysid.gripper import gripper_json, gripper_lines
 from realm_ms.sysid.signatures import noise_floor, noise_floor_of
 from realm_ms.sysid.timeseries import Trajectory
 
@@ -109,6 +110,7 @@ class CompareResult:
     interaction_fraction: float
     trajectories: list[dict]  # {name, rmse_rad, max_abs_error_rad, masked}
     error_over_time: list[tuple[str, float, float]]  # (trajectory, t, RMS over joints) per scored sample
+    gripper: object = None  # the gripper row (``sysid/gripper.GripperCheck``), set by the API when the data has one
     unit = "rad"
 
     def to_json(self) -> dict:
@@ -116,7 +118,7 @@ class CompareResult:
                 "per_joint_max_abs_error_rad": self.per_joint_max_abs_error, "noise_floor_rad": self.noise_floor,
                 "saturated_fraction": self.saturated_fraction, "interaction_fraction": self.interaction_fraction,
                 "noise_floor_per_joint_rad": self.noise_floor_per_joint, "trajectories": self.trajectories,
-                "error_over_time": self.error_over_time}
+                "error_over_time": self.error_over_time} | gripper_json(self.gripper)
 
     def lines(self) -> list[str]:
         """The terminal summary: per-joint RMSE and max error, masked samples, worst trajectories."""
@@ -132,7 +134,7 @@ class CompareResult:
                                    for t in self.trajectories if t.get("masked") and t["masked"]["masked"] > 0))
         worst = sorted(self.trajectories, key=lambda t: -(t["rmse_rad"] or 0))[:3]
         out.append("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
-        return out
+        return out + gripper_lines(self.gripper)
 
 
 def _metrics(tr: GroupScores, he: GroupScores) -> dict:

@@ -80,10 +80,12 @@ def strokes(g: np.ndarray, t: np.ndarray, name: str = "") -> list[Stroke]:
     return out
 
 
-def simulate(cmd: np.ndarray, t: np.ndarray, g0: np.ndarray, delay=0.0, speed=1.0, tau=0.0) -> np.ndarray:
+def simulate(cmd: np.ndarray, t: np.ndarray, g0: np.ndarray, delay=0.0, speed=1.0, tau=0.0,
+             target0: np.ndarray | None = None) -> np.ndarray:
     """The simulated gripper's positions (B, T) answering requests ``cmd`` (B, T) held from ``t[i]`` to
-    ``t[i+1]``, measured at ``g0`` (B,) at rest on the request ``cmd[:, 0]``; ``delay``, ``speed``,
-    ``tau``: numbers or (B,) arrays (one candidate per row)."""
+    ``t[i+1]``, measured at ``g0`` (B,) with its drive target at ``target0`` (default: at rest on the
+    request ``cmd[:, 0]``, reached or held by an object); ``delay``, ``speed``, ``tau``: numbers or (B,)
+    arrays (one candidate per row)."""
     cmd = torch.as_tensor(np.atleast_2d(cmd), dtype=torch.float64)
     b = cmd.shape[0]
 
@@ -92,7 +94,7 @@ def simulate(cmd: np.ndarray, t: np.ndarray, g0: np.ndarray, delay=0.0, speed=1.
         return x[:, None]
 
     law = GripperLaw(col(delay), col(speed), col(tau))
-    law.reset(cmd[:, :1])  # at rest, the drive target is the request (reached, or an object holds the fingers)
+    law.reset(cmd[:, :1] if target0 is None else torch.as_tensor(np.asarray(target0, float).reshape(b, 1)))
     out = torch.empty_like(cmd)
     out[:, 0] = torch.as_tensor(np.asarray(g0, float).reshape(b))
     dts = np.diff(np.asarray(t, float))
@@ -104,16 +106,31 @@ def simulate(cmd: np.ndarray, t: np.ndarray, g0: np.ndarray, delay=0.0, speed=1.
     return out.numpy()
 
 
+def synth_gripper(t: np.ndarray, rng: np.random.Generator, values: dict, noise: float = 0.002
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """A gripper channel for synthetic data (``realm sysid synth``): full open/close requests, each
+    held 1.5-3 s, answered by the simulated gripper under ``gripper_response`` ``values``; (measured,
+    request). Full strokes only: a stop short of closed would read as a grasp (``interaction.py``)."""
+    cmd, state, i = np.zeros(len(t)), 0.0, 0
+    rate = (len(t) - 1) / max(float(t[-1] - t[0]), 1e-9)
+    while i < len(t):
+        n = int(rng.uniform(1.5, 3.0) * rate)
+        cmd[i:i + n] = state
+        state, i = 1.0 - state, i + n
+    g = simulate(cmd[None], t, cmd[:1], values.get("delay", 0.0), values.get("speed", 1.0), values.get("tau", 0.0))[0]
+    return np.clip(g + rng.normal(0.0, noise, len(t)), 0.0, 1.0), cmd
+
+
 @dataclass
 class GripperCheck:
     """The gripper row: measured strokes against the simulated gripper's answer, and the fitted effect."""
 
     strokes: int  # measured strokes counted
     closing: int
-    speed_real: float  # median stroke speed, units/s
+    speed_real: float | None  # median stroke speed, units/s (None: no strokes)
     speed_sim: float  # the same over the simulated answer, units/s
-    speed: float  # fitted gripper_response.speed (the simulated speed scale that matches)
-    delay: float | None  # fitted gripper_response.delay, s; None without the request
+    speed: float  # the factor on the checked model's stroke speed that matches the measured strokes
+    delay: float | None  # s to add to the checked model's request delay (< 0: earlier); None without the request
     with_command: bool
     rmse_before: float | None = None  # over the stroke windows, units; with the request only
     rmse_after: float | None = None
@@ -122,15 +139,16 @@ class GripperCheck:
 
     @property
     def matches(self) -> bool:
-        return abs(self.speed - 1.0) <= SPEED_TOL and (self.delay is None or self.delay <= DELAY_TOL_S)
+        return abs(self.speed - 1.0) <= SPEED_TOL and (self.delay is None or abs(self.delay) <= DELAY_TOL_S)
 
     @property
     def verdict(self) -> str:
         if self.matches:
             return "matches"
         what = "slower" if self.speed < 1.0 - SPEED_TOL else ("faster" if self.speed > 1.0 + SPEED_TOL else "as fast")
-        late = self.delay is not None and self.delay > DELAY_TOL_S
-        return f"real gripper {what}" + (" and later" if late else "")
+        if self.delay is None or abs(self.delay) <= DELAY_TOL_S:
+            return f"real gripper {what}"
+        return f"real gripper {what} and {'later' if self.delay > 0 else 'earlier'}"
 
     def effect(self) -> GripperResponse:
         """The ``gripper_response`` that makes the checked model's gripper answer like the measured one."""
@@ -156,7 +174,7 @@ class GripperCheck:
         if self.delay is None:
             s += "; no gripper_cmd: the delay from request to motion cannot be seen"
         else:
-            s += f", delay {1e3 * self.delay:.0f} ms; stroke RMSE {self.rmse_before:.3f} -> {self.rmse_after:.3f}"
+            s += f", delay {1e3 * self.delay:+.0f} ms; stroke RMSE {self.rmse_before:.3f} -> {self.rmse_after:.3f}"
         return s + f"): {self.verdict}"
 
 
@@ -167,19 +185,20 @@ def check_gripper(trajs, model=None) -> GripperCheck:
     has strokes: (delay, speed) fitted on the stroke windows; else the speed alone."""
     fx = model.effect("gripper_response") if model is not None else None
     base = fx.values() if fx is not None else {"delay": 0.0, "speed": 1.0, "tau": 0.0}
+    values = base if fx is not None else None
     found = [(tr, strokes(tr.gripper, tr.t, tr.name)) for tr in trajs if tr.gripper is not None]
     found = [(tr, ss) for tr, ss in found if ss]
     all_strokes = [s for _, ss in found for s in ss]
     closing = [s for s in all_strokes if s.direction == "close"]
     stops = sorted(round(s.end, 3) for s in closing if s.end < 0.95)
     if not all_strokes:
-        return GripperCheck(0, 0, float("nan"), SIM_SPEED * base["speed"], 1.0, None, False, model_values=fx and base)
+        return GripperCheck(0, 0, None, SIM_SPEED * base["speed"], 1.0, None, False, model_values=values)
     speed_real = float(np.median([s.speed for s in all_strokes]))
     with_cmd = all(tr.gripper_cmd is not None for tr, _ in found)
     if not with_cmd:
         speed_sim = _step_answer_speed(all_strokes, base)
         return GripperCheck(len(all_strokes), len(closing), speed_real, speed_sim, speed_real / speed_sim, None, False,
-                            grasp_stops=stops, model_values=fx and base)
+                            grasp_stops=stops, model_values=values)
     windows = _windows(found)
     before = _window_rmse(windows, [base["delay"]], [base["speed"]], base["tau"])[0]
     delay, speed, after = _fit_windows(windows, base)
@@ -188,7 +207,7 @@ def check_gripper(trajs, model=None) -> GripperCheck:
     sim = [s for w in _answers(windows, base["delay"], base["speed"], base["tau"]) for s in w]
     speed_sim = float(np.median([s.speed for s in sim])) if sim else SIM_SPEED * base["speed"]
     return GripperCheck(len(all_strokes), len(closing), speed_real, speed_sim, speed / base["speed"],
-                        max(0.0, delay - base["delay"]), True, before, after, stops, fx and base)
+                        delay - base["delay"], True, before, after, stops, values)
 
 
 def _step_answer_speed(found: list[Stroke], base: dict) -> float:
@@ -227,7 +246,10 @@ def _batch(windows: list[_Window], delays, speeds, tau):
     dt = float(np.median(np.concatenate([np.diff(w.t) for w in windows])))
     t = np.arange(n) * dt
     p, nw = len(delays), len(windows)
-    y = simulate(np.tile(cmd, (p, 1)), t, np.tile(g[:, 0], p), np.repeat(delays, nw), np.repeat(speeds, nw), tau)
+    # a window that starts in motion (the previous stroke turned back) starts with the target on the fingers
+    target0 = np.where(np.abs(g[:, 1] - g[:, 0]) / dt > MOVING, g[:, 0], cmd[:, 0])
+    y = simulate(np.tile(cmd, (p, 1)), t, np.tile(g[:, 0], p), np.repeat(delays, nw), np.repeat(speeds, nw), tau,
+                 np.tile(target0, p))
     y = np.clip(y.reshape(p, nw, n), g.min(1)[None, :, None], g.max(1)[None, :, None])
     valid = np.arange(n)[None, :] < np.array([len(w.t) for w in windows])[:, None]
     return y, g, valid, t
@@ -261,3 +283,13 @@ def _answers(windows, delay, speed, tau) -> list[list[Stroke]]:
         y = simulate(w.cmd[None], w.t, w.g[:1], delay, speed, tau)[0]
         out.append(strokes(y, w.t))
     return out
+
+
+def gripper_json(check: GripperCheck | None) -> dict:
+    """The ``gripper`` key of a verb's JSON (none when the data has no gripper channel)."""
+    return {} if check is None else {"gripper": check.to_json()}
+
+
+def gripper_lines(check: GripperCheck | None) -> list[str]:
+    """The ``gripper`` row of a verb's terminal summary."""
+    return [] if check is None else [check.line()]

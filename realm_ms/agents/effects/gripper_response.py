@@ -29,6 +29,7 @@ class GripperResponse(Effect):
                  "request; the arm's residual is unchanged")
     order = 90
     screened = False  # the arm replay cannot see it: the workbench's gripper channel fits it (sysid/gripper.py)
+    acts_on = "gripper"
     step_cost = (0.0, 0.0)
 
     @classmethod
