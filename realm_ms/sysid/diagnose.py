@@ -393,7 +393,7 @@ def unscreened(candidates, seen, library=None) -> list[str]:
     """Library effects (``library``: names, default every effect) neither screened (``candidates``)
     nor already seen (tried or in the model), in library order."""
     if library is None:
-        library = EFFECTS
+        library = [n for n, c in EFFECTS.items() if c.acts_on == "arm"]
     return [n for n in library if n not in candidates and n not in seen]
 
 
