@@ -275,7 +275,7 @@ class RobotiqGripperController(PDJointPosMimicController):
         super().reset()
         self._goal_qpos = self._target_qpos.clone()
         if self.response is not None:
-            self.response.reset(self._target_qpos)
+            self.response.reset(self._target_qpos, self.scene._reset_mask)
         # the drive may still hold the previous episode's target; idle steps skip writing it
         self.set_drive_targets(self._target_qpos)
 
@@ -302,7 +302,7 @@ class RobotiqGripperController(PDJointPosMimicController):
             target = self.response.step(self._goal_qpos, dt, self.config.max_speed)
             if torch.equal(target, self._target_qpos):
                 return
-            self._target_qpos = target
+            self._target_qpos = target.clone()  # ManiSkill writes reset rows into it in place
         elif torch.equal(self._target_qpos, self._goal_qpos):
             return  # idle gripper: the drive already holds this target
         else:

@@ -135,3 +135,20 @@ def test_env_gripper_is_the_law_and_the_effect_slows_it():
     tr = Trajectory("env", t, np.zeros((len(t), 7)), np.zeros((len(t), 7)), gripper=slow, gripper_cmd=cmd)
     c = check_gripper([tr])
     assert c.speed == pytest.approx(0.6, abs=0.04) and c.delay == pytest.approx(0.1, abs=0.02)
+
+
+def test_law_partial_reset_keeps_the_other_envs_requests_in_flight():
+    import torch
+
+    from realm_ms.agents.effects.gripper_response import GripperLaw
+
+    law, dt, v = GripperLaw(delay=0.1, speed=0.6), 1 / 120, 1.0
+    law.reset(torch.zeros(3, 1))
+    for _ in range(5):  # 42 ms of a 100 ms delay: nothing moves yet
+        y = law.step(torch.ones(3, 1), dt, v)
+    assert float(y.abs().max()) == 0.0
+    law.reset(torch.zeros(3, 1), torch.tensor([False, True, False]))
+    for _ in range(10):
+        y = law.step(torch.ones(3, 1), dt, v)
+    # envs 0 and 2 kept their request: moving for 3 steps at 0.6 v; env 1's arrives 100 ms after its reset
+    np.testing.assert_allclose(y[:, 0].numpy(), [3 * 0.6 * v * dt, 0.0, 3 * 0.6 * v * dt], atol=1e-6)

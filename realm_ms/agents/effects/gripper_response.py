@@ -62,11 +62,17 @@ class GripperLaw:
         self._hist = None
         self._consts = None
 
-    def reset(self, target: torch.Tensor) -> None:
-        """Start at rest on ``target`` (B, n): the history, the rate limiter and the lag."""
-        self._hist = None
-        self._ramp = target.clone()
-        self._out = target.clone()
+    def reset(self, target: torch.Tensor, rows: torch.Tensor | None = None) -> None:
+        """Start at rest on ``target`` (B, n): the history, the rate limiter and the lag; ``rows``
+        (a (B,) bool mask): only those envs (a partial reset), the others keep their requests in flight."""
+        if rows is None or self._hist is None or bool(rows.all()):
+            self._hist = None
+            self._ramp = target.clone()
+            self._out = target.clone()
+            return
+        self._ramp[rows] = target[rows]
+        self._out[rows] = target[rows]
+        self._hist[:, rows] = target[rows]
 
     def _constants(self, like: torch.Tensor, dt: float, max_speed: float):
         """Per (dt, max_speed): history rows and weight of the delayed request, step limit, lag factor."""
