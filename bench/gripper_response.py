@@ -95,6 +95,12 @@ def main(argv=None) -> int:
         for d, r in table.items():
             print(f"{label[:22]:<22} {d:<5} {r['n']:>4} {r['speed']:>8.2f} {r['speed_p10']:>5.2f}-{r['speed_p90']:<5.2f} "
                   f"{r['peak']:>7.2f} {r['full_stroke_s']:>7.2f} {r['end_median']:>6.3f}")
+    labs = {}
+    for e in eps:
+        if e.traj.gripper is not None:
+            labs.setdefault(e.lab, []).extend(x.speed for x in strokes(e.traj.gripper, e.traj.t, e.name))
+    print("real per lab, median stroke speed /s (strokes): " + ", ".join(
+        f"{lab} {np.median(v):.2f} ({len(v)})" for lab, v in sorted(labs.items()) if v))
     for label, _ in runs:
         ratio = {d: rows[f"sim {label}"][d]["speed"] / rows["real"][d]["speed"] for d in rows["real"]}
         print(f"sim {label}: speed / real " + ", ".join(f"{d} {v:.2f}×" for d, v in ratio.items())
@@ -106,7 +112,8 @@ def main(argv=None) -> int:
         print(f"workbench, {label}: {c.line()}")
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"tables": rows, "checks": checks, "env_step_ms": step_ms}, f, indent=1)
+            json.dump({"tables": rows, "labs": {k: float(np.median(v)) for k, v in labs.items() if v}, "checks": checks,
+                       "env_step_ms": step_ms}, f, indent=1)
     return 0
 
 

@@ -100,7 +100,7 @@ def effects() -> list[dict[str, Any]]:
         fx = make_effect(name)
         out.append({
             "name": name, "summary": cls.summary, "signature": cls.signature,
-            "kind": "build-time" if cls.build_time else "torque-path",
+            "kind": "gripper" if cls.acts_on == "gripper" else ("build-time" if cls.build_time else "torque-path"),
             "params": [{"name": s.name, "unit": s.unit, "per_joint": s.per_joint, "nominal": s.nominal,
                         "bounds": [s.lo, s.hi], "off": s.off, "scale": s.scale, "fitted_by_default": s.fit_by_default,
                         "doc": s.doc} for s in fx.specs],
