@@ -196,7 +196,7 @@ def check_gripper(trajs, model=None) -> GripperCheck:
     speed_real = float(np.median([s.speed for s in all_strokes]))
     with_cmd = all(tr.gripper_cmd is not None for tr, _ in found)
     if not with_cmd:
-        speed_sim = _step_answer_speed(all_strokes, base)
+        speed_sim = _step_answer_speed(all_strokes, base, float(np.median([tr.rate_hz for tr, _ in found])))
         return GripperCheck(len(all_strokes), len(closing), speed_real, speed_sim, speed_real / speed_sim, None, False,
                             grasp_stops=stops, model_values=values)
     windows = _windows(found)
@@ -210,10 +210,11 @@ def check_gripper(trajs, model=None) -> GripperCheck:
                         delay - base["delay"], True, before, after, stops, values)
 
 
-def _step_answer_speed(found: list[Stroke], base: dict) -> float:
-    """Median stroke speed of the simulated answer to a step request over each measured stroke."""
+def _step_answer_speed(found: list[Stroke], base: dict, rate_hz: float) -> float:
+    """Median stroke speed of the simulated answer to a step request over each measured stroke,
+    sampled at the log's rate."""
     n = max(s.steps for s in found) + 4
-    t = np.arange(n) / 15.0
+    t = np.arange(n) / rate_hz
     cmd = np.array([[s.begin] + [s.end] * (n - 1) for s in found])
     y = simulate(cmd, t, cmd[:, 0], 0.0, base["speed"], base["tau"])
     return float(np.median([x.speed for row in y for x in strokes(row, t)]))
