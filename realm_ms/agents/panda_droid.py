@@ -96,16 +96,24 @@ class PandaDroid(BaseAgent):
         return ctrl.controllers["arm"] if hasattr(ctrl, "controllers") else ctrl
 
     def set_robot_model(self, model) -> None:
-        """Use identified dynamics: a ``MODEL.yaml`` path, a dict, or an ``ActuationModel``."""
-        if not isinstance(model, ActuationModel):
-            from realm_ms.agents.robot_model import load_actuation_model
+        """Use identified dynamics: a ``RobotModel``, a ``MODEL.yaml`` path or name, a dict (the arm's
+        stages and the gripper's response), or an ``ActuationModel`` (the arm's stages alone)."""
+        if isinstance(model, ActuationModel):
+            actuation, law = model, None
+        else:
+            from realm_ms.agents.robot_model import RobotModel
 
-            model = load_actuation_model(model)
+            model = RobotModel.load(model)
+            actuation, law = model.actuation(), model.gripper_law()
         arm = self.controllers["droid_joint_pos"].controllers["arm"] if "droid_joint_pos" in self.controllers else None
         if arm is None:
             raise InputError("robot_model needs the droid_joint_pos control mode")
-        arm.set_robot_model(model)
-        model.build(self.robot, arm.active_joint_indices.tolist())
+        arm.set_robot_model(actuation)
+        actuation.build(self.robot, arm.active_joint_indices.tolist())
+        for mode in self.controllers.values():  # the gripper's response, in every control mode
+            grip = mode.controllers.get("gripper") if hasattr(mode, "controllers") else None
+            if grip is not None:
+                grip.set_response(law)
 
     # ------------------------------------------------------------------ sensors
     @property

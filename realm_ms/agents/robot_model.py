@@ -169,8 +169,18 @@ class RobotModel:
         check_effects(self.effects, "effects: ")
 
     def actuation(self) -> ActuationModel:
-        """Stages in canonical order (measure/command first, friction last)."""
-        return ActuationModel(sorted(self.effects, key=lambda e: e.order))
+        """The arm's stages in canonical order (measure/command first, friction last)."""
+        return ActuationModel(sorted(self.arm_effects, key=lambda e: e.order))
+
+    @property
+    def arm_effects(self) -> list[Effect]:
+        """The effects on the arm: what the arm's controller and the arm replay run."""
+        return [e for e in self.effects if e.acts_on == "arm"]
+
+    def gripper_law(self):
+        """The gripper controller's law (``gripper_response``), or None: the nominal gripper."""
+        fx = self.effect("gripper_response")
+        return fx.law() if fx is not None else None
 
     @property
     def names(self) -> list[str]:
@@ -314,7 +324,7 @@ def load_robot_model(path_or_dict) -> RobotModel:
 
 
 def load_actuation_model(path_or_dict) -> ActuationModel:
-    """The benchmark's entry point: ``controller.set_robot_model(load_actuation_model("MODEL.yaml"))``
+    """The arm's stages: ``controller.set_robot_model(load_actuation_model("MODEL.yaml"))``
     then ``actuation.build(articulation, joint_indices)`` once the articulation is loaded (armature,
     payload). Use the file's ``gains`` and ``joint_physics`` presets for the controller too
     (``load_robot_model(path).gains`` / ``.joint_physics``)."""

@@ -245,9 +245,18 @@ class RobotiqGripperController(PDJointPosMimicController):
     0, the REALM/DROID binary gripper). Like the real 2F-85 (position request + speed + force), the
     drive target moves towards the goal at ``max_speed`` rad/s (updated every physics step), and the
     PD drive's torque is capped by ``force_limit`` (grip force on contact). ``max_speed=None`` sets
-    the goal at once (then the closing speed is only limited by the drive)."""
+    the goal at once (then the closing speed is only limited by the drive). A robot model's
+    ``gripper_response`` effect (``set_response``) replaces the plain rate limit by its law: the
+    request delayed, a slower or faster stroke, a lag."""
 
     config: "RobotiqGripperControllerConfig"
+    response = None  # a ``GripperLaw`` (agents/effects/gripper_response.py), or None: the plain rate limit
+
+    def set_response(self, law) -> None:
+        """Run the drive target through ``law`` (a ``GripperLaw``; None: back to the plain rate limit)."""
+        self.response = law
+        if law is not None and getattr(self, "_target_qpos", None) is not None:  # else at the next reset
+            law.reset(self._target_qpos)
 
     def _initialize_action_space(self):
         self.single_action_space = spaces.Box(
@@ -265,6 +274,8 @@ class RobotiqGripperController(PDJointPosMimicController):
     def reset(self):
         super().reset()
         self._goal_qpos = self._target_qpos.clone()
+        if self.response is not None:
+            self.response.reset(self._target_qpos, self.scene._reset_mask)
         # the drive may still hold the previous episode's target; idle steps skip writing it
         self.set_drive_targets(self._target_qpos)
 
@@ -286,12 +297,17 @@ class RobotiqGripperController(PDJointPosMimicController):
         if self.config.max_speed is None:
             return super().before_simulation_step()
         self._step += 1
-        if torch.equal(self._target_qpos, self._goal_qpos):
-            return  # idle gripper: the drive already holds this target
         dt = float(self.articulation.px.timestep)
-        max_dq = self.config.max_speed * dt
-        delta = torch.clamp(self._goal_qpos - self._target_qpos, -max_dq, max_dq)
-        self._target_qpos = self._target_qpos + delta
+        if self.response is not None:  # its delay line and lag move even when the request holds still
+            target = self.response.step(self._goal_qpos, dt, self.config.max_speed)
+            if torch.equal(target, self._target_qpos):
+                return
+            self._target_qpos = target.clone()  # ManiSkill writes reset rows into it in place
+        elif torch.equal(self._target_qpos, self._goal_qpos):
+            return  # idle gripper: the drive already holds this target
+        else:
+            max_dq = self.config.max_speed * dt
+            self._target_qpos = self._target_qpos + torch.clamp(self._goal_qpos - self._target_qpos, -max_dq, max_dq)
         self.set_drive_targets(self._target_qpos)
         if self.scene.gpu_sim_enabled:  # ManiSkill applies GPU targets once per action; we move them every substep
             self.scene.px.gpu_apply_articulation_target_position()

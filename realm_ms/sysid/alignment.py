@@ -346,7 +346,7 @@ def _replay_batch(episodes: list[DroidEpisode], model, rows: np.ndarray, sim) ->
     cmds = np.stack([np.concatenate([e.cartesian_cmd, np.repeat(e.cartesian_cmd[-1:], steps - e.steps, 0)]) for e in episodes])
     q0 = np.stack([e.q[0] for e in episodes])
     effects = []
-    for fx in model.effects:  # this batch's rows of per-episode parameters
+    for fx in model.arm_effects:  # this batch's rows of per-episode parameters (the arm's: its gripper is locked)
         th = fx.theta.cpu().numpy()
         part = make_effect(fx.name, fx.values(), fx.config_dict())
         part.set_theta(th[rows] if th.shape[0] > 1 else th)

@@ -84,6 +84,13 @@ def _model(model):
     return RobotModel.load(model)
 
 
+def _arm(model):
+    """The model the arm's space replays: the gripper's effects left out (the gripper row judges them)."""
+    arm = model.copy()
+    arm.effects = arm.arm_effects
+    return arm
+
+
 def effects() -> list[dict[str, Any]]:
     """The effect library: name, summary, signature and parameters with units, bounds, off-values."""
     from realm_ms.agents.effects import EFFECTS, make_effect
@@ -93,7 +100,7 @@ def effects() -> list[dict[str, Any]]:
         fx = make_effect(name)
         out.append({
             "name": name, "summary": cls.summary, "signature": cls.signature,
-            "kind": "build-time" if cls.build_time else "torque-path",
+            "kind": "gripper" if cls.acts_on == "gripper" else ("build-time" if cls.build_time else "torque-path"),
             "params": [{"name": s.name, "unit": s.unit, "per_joint": s.per_joint, "nominal": s.nominal,
                         "bounds": [s.lo, s.hi], "off": s.off, "scale": s.scale, "fitted_by_default": s.fit_by_default,
                         "doc": s.doc} for s in fx.specs],
@@ -161,8 +168,10 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
     trajs = data if isinstance(data, list) else load_dir(data, options=opts)
     if heldout is not None:
         trajs = trajs + load_dir(heldout, options=opts)
-    with _make_space(trajs, [], space, m, workers, device, identify=False) as sp:
-        return sp.compare(m, segment_s=segment_s)
+    with _make_space(trajs, [], space, _arm(m), workers, device, identify=False) as sp:
+        res = sp.compare(_arm(m), segment_s=segment_s)
+    res.gripper = _gripper(trajs, m)
+    return res
 
 
 def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device=None, log=print,
@@ -170,11 +179,13 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
     """The ranked suspects: a ``diagnose.Diagnosis`` (``.to_json()`` is the documented JSON)."""
     from realm_ms.sysid.diagnose import DiagnoseConfig
 
+    _arm_only(candidates or (), "candidates (--candidates)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, m, workers, device) as sp:
-        d = sp.diagnose(m, DiagnoseConfig(**config), log=log, candidates=candidates)
+    with _make_space(train, held, space, _arm(m), workers, device) as sp:
+        d = sp.diagnose(_arm(m), DiagnoseConfig(**config), log=log, candidates=candidates)
     d.split = _split_block(train, held, seed)
+    d.gripper = _gripper(train + held, m)
     return d
 
 
@@ -182,6 +193,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         device=None, progress: bool = True, log=print, space: str | None = None, command: str | None = None,
         **config):
     """Add effects and fit: a ``fit.FitResult`` (position) or ``TorqueFit``; ``.model`` is saved at ``out``."""
+    from realm_ms.sysid.effect_spec import parse_effects
     from realm_ms.sysid.fit import FitConfig
     from realm_ms.validate import check_output_file
 
@@ -191,14 +203,16 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_int(config["generations"], "generations (--generations)", minimum=1)
     if "noise_stop" in config:
         check_non_negative(config["noise_stop"], "noise_stop (--noise-stop)")
+    _arm_only([fx.name for fx in parse_effects(add)], "add (--add)")
     if out is not None:
         check_output_file(out, "out (--out)")  # before the fit, not after it
     if config.get("checkpoint"):
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, m, workers, device, progress) as sp:
-        res = sp.fit(m, FitConfig(add=add, seed=seed, **config), log=log)
+    with _make_space(train, held, space, _arm(m), workers, device, progress) as sp:
+        res = sp.fit(_arm(m), FitConfig(add=add, seed=seed, **config), log=log)
+    res.model.effects += [e for e in m.effects if e.acts_on != "arm"]  # kept as given
     res.model.provenance.update(_provenance(data, sp, train, held, res.effects, res.heldout_after))
     if out is not None:
         res.model.save(out)
@@ -221,11 +235,17 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
         check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, m, workers, device, progress) as sp:
-        res = _auto(sp, m, AutoConfig(seed=seed, **config), progress, log)
+    with _make_space(train, held, space, _arm(m), workers, device, progress) as sp:
+        res = _auto(sp, _arm(m), AutoConfig(seed=seed, **config), progress, log)
     swapped_out = {s.replaces for s in res.steps}
-    res.model.provenance.update(_provenance(data, sp, train, held, [s.effect for s in res.steps if s.effect not in swapped_out],
-                                            res.heldout_rmse))
+    fitted = [s.effect for s in res.steps if s.effect not in swapped_out]
+    res.gripper = _gripper(train + held, m)
+    gripper = [e for e in m.effects if e.acts_on != "arm"]
+    if res.gripper is not None and not res.gripper.matches:  # the gripper channel's step: its fitted effect
+        gripper = [e for e in gripper if e.name != "gripper_response"] + [res.gripper.effect()]
+        fitted.append("gripper_response")
+    res.model.effects += gripper
+    res.model.provenance.update(_provenance(data, sp, train, held, fitted, res.heldout_rmse))
     if out is not None:
         res.model.save(out)
     res.split = _split_block(train, held, seed)
@@ -240,8 +260,8 @@ def report(data, model=None, out: str | Path = "report.html", heldout=None, seed
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, m, workers, device) as sp:
-        return sp.report(m if model is not None else None, Path(out), str(data), log=log, waterfall=waterfall,
+    with _make_space(train, held, space, _arm(m), workers, device) as sp:
+        return sp.report(_arm(m) if model is not None else None, Path(out), str(data), log=log, waterfall=waterfall,
                          diagnosis=_load_json(diagnosis, ("baseline", "suspects"), "diagnose --json"),
                          fit_result=_load_json(fit_result, ("history", "before", "after"), "fit --json"),
                          auto=_load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json"))
@@ -262,7 +282,28 @@ def align(data, model=None, out: str | Path = "align.html", command: str | None 
     episodes, skipped = read_droid_episodes(data, command)
     m = _model(model) if model is not None else None
     name = "nominal" if model is None else Path(str(model)).name
-    return build_align_report(episodes, m, name, Path(out), str(data), skipped, waterfall, log)
+    res = build_align_report(episodes, m, name, Path(out), str(data), skipped, waterfall, log)
+    from realm_ms.sysid.gripper import gripper_json
+
+    return res | gripper_json(_gripper([e.traj for e in episodes if e.traj is not None], m))
+
+
+def _arm_only(names, where: str) -> None:
+    """InputError for an effect on the gripper among the arm replay's effects."""
+    from realm_ms.agents.effects import effect_class
+
+    gripper = [n for n in names if effect_class(n).acts_on != "arm"]
+    if gripper:
+        raise InputError(f"{where}: {', '.join(gripper)} acts on the gripper, which the arm replay does not simulate; "
+                         "the gripper row of `realm sysid compare`, `diagnose` and `align` judges it and "
+                         "`realm sysid auto` adds it to the model it writes")
+
+
+def _gripper(trajs: list[Trajectory], model):
+    """The gripper row (``sysid/gripper.py``) when the data has a gripper channel, else None."""
+    from realm_ms.sysid.gripper import check_gripper
+
+    return check_gripper(trajs, model) if any(t.gripper is not None for t in trajs) else None
 
 
 def _load_json(obj, keys: tuple[str, ...], what: str):

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from realm_ms.agents.robot_model import RobotModel
+from realm_ms.sysid.gripper import gripper_json
 from realm_ms.sysid.diagnose import DiagnoseConfig, Suspect, judging_floor, times_floor, unscreened, unscreened_note
 
 #: velocity grid of the reported friction curve: +-0.05 ... 1.5 rad/s
@@ -208,6 +209,7 @@ class AutoResult:
     # kept effects a look-alike fits as well in place of: [{"effects": [kept, look-alike], "heldout_rmse": [2]}]
     confounded: list[dict] = field(default_factory=list)
     flange: object = None  # alignment.FlangeComparison: held-out flange mm, lag and b, start -> final model
+    gripper: object = None  # the gripper row (``sysid/gripper.GripperCheck``), set by the API when the data has one
 
     def to_json(self) -> dict:
         out = {"unit": self.unit, "nominal_heldout_rmse": self.nominal_heldout_rmse,
@@ -222,7 +224,7 @@ class AutoResult:
             out["split"] = self.split
         if self.flange is not None:
             out["flange"] = self.flange.to_json()
-        return out
+        return out | gripper_json(self.gripper)
 
 
 def auto(space, model: RobotModel | None = None, config: AutoConfig | None = None, progress: bool = True,

@@ -213,6 +213,8 @@ def _diagnose(args) -> int:
     for i, s in enumerate(d["suspects"][: args.top], 1):
         print(f"{i:2d}. {s['effect']:<20} score {s['score']:+.2f}  held-out RMSE after {s[f'heldout_rmse_after_{sfx}']:.2e} {u}")
         print(f"    {s['evidence']}")
+    if "gripper" in d:
+        print(d["gripper"]["line"])
     _write_json(args.json, d)
     return 0
 
@@ -259,6 +261,8 @@ def _auto(args) -> int:
     print(f"final {f['heldout_rmse']:.3e} {u}, noise floor {f['noise_floor']:.2e} {u}: {f['verdict']}")
     print(a["details"]["message"])
     print("held-out " + res.flange.line())
+    if "gripper" in a:
+        print(a["gripper"]["line"] + ("" if a["gripper"]["verdict"] == "matches" else " -> gripper_response added to the model"))
     if args.out:
         print(f"model -> {args.out}")
     _write_json(args.json, a)
@@ -295,6 +299,8 @@ def _align(args) -> int:
         print(f"{r['label'][:40]:<40} {o['flange_mm']:>9.1f} {r['free_flange_mm']:>8.1f} {o['lag_sim']:>7.1f} {o['b_sim']:>6.2f}")
     masked = [e["masked"] for e in a["runs"][0]["episodes"]]
     print(f"grasps/stalls masked: {np.mean(masked):.0%} of steps on average; {len(a['skipped'])} episode(s) left out")
+    if "gripper" in a:
+        print(a["gripper"]["line"])
     _write_json(args.json, a)
     print(f"wrote {args.out}")
     return 0

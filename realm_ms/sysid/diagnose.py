@@ -35,6 +35,7 @@ from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
 from realm_ms.errors import InputError
 from realm_ms.sysid.alignment import replay_flange
 from realm_ms.sysid.optimize import Group, LinearStep, copy_effect, evaluate_groups, linearized_step, typical_start
+from realm_ms.sysid.gripper import gripper_json
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.sysid.saturation import PAD_S
 from realm_ms.agents.robot_model import RobotModel
@@ -120,6 +121,7 @@ class Diagnosis:
     split: dict | None = None  # the train/held-out split the API used (``api._split_block``)
     # candidates whose own parameters did nothing at their off-values, stepped from typical strengths too
     rescreened: list[str] = field(default_factory=list)
+    gripper: object = None  # the gripper row (``sysid/gripper.GripperCheck``), set by the API when the data has one
 
     @property
     def missing_effect_found(self) -> bool:
@@ -158,7 +160,7 @@ class Diagnosis:
         out["flange"] = self.flange.to_json()
         if self.split is not None:
             out["split"] = self.split
-        return out
+        return out | gripper_json(self.gripper)
 
 
 def gravity_at_samples(segset: SegmentSet, model) -> np.ndarray:
@@ -402,7 +404,7 @@ def unscreened(candidates, seen, library=None) -> list[str]:
     """Library effects (``library``: names, default every effect) neither screened (``candidates``)
     nor already seen (tried or in the model), in library order."""
     if library is None:
-        library = EFFECTS
+        library = [n for n, c in EFFECTS.items() if c.acts_on == "arm"]
     return [n for n in library if n not in candidates and n not in seen]
 
 

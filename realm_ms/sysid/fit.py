@@ -21,6 +21,7 @@ from realm_ms.sysid.optimize import Group, GroupScores, cma_fit, confidence_inte
 from realm_ms.sysid.replay import SegmentSet
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
+from realm_ms.sysid.gripper import gripper_json, gripper_lines
 from realm_ms.sysid.signatures import noise_floor, noise_floor_of
 from realm_ms.sysid.timeseries import Trajectory
 
@@ -116,6 +117,7 @@ class CompareResult:
     trajectories: list[dict]  # {name, rmse_rad, max_abs_error_rad, masked}
     error_over_time: list[tuple[str, float, float]]  # (trajectory, t, RMS over joints) per scored sample
     flange: FlangeComparison | None = None  # flange mm, lag and b beside the real arm's, per trajectory and lab
+    gripper: object = None  # the gripper row (``sysid/gripper.GripperCheck``), set by the API when the data has one
     unit = "rad"
 
     def to_json(self) -> dict:
@@ -123,7 +125,8 @@ class CompareResult:
                 "per_joint_max_abs_error_rad": self.per_joint_max_abs_error, "noise_floor_rad": self.noise_floor,
                 "saturated_fraction": self.saturated_fraction, "interaction_fraction": self.interaction_fraction,
                 "noise_floor_per_joint_rad": self.noise_floor_per_joint, "trajectories": self.trajectories,
-                "error_over_time": self.error_over_time, "flange": self.flange.to_json() if self.flange else None}
+                "error_over_time": self.error_over_time, "flange": self.flange.to_json() if self.flange else None} \
+            | gripper_json(self.gripper)
 
     def lines(self) -> list[str]:
         """The terminal summary: per-joint RMSE and max error, masked samples, worst trajectories."""
@@ -141,7 +144,7 @@ class CompareResult:
         out.append("worst trajectories: " + ", ".join(f"{t['name']} ({t['rmse_rad']:.2e} rad)" for t in worst))
         if self.flange is not None:
             out.append(self.flange.line())
-        return out
+        return out + gripper_lines(self.gripper)
 
 
 def _metrics(tr: GroupScores, he: GroupScores) -> dict:

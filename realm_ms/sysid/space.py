@@ -83,7 +83,7 @@ class PositionSpace:
     def library(self) -> list[str]:
         from realm_ms.agents.effects import EFFECTS
 
-        return list(EFFECTS)
+        return [n for n, c in EFFECTS.items() if c.acts_on == "arm"]  # the gripper's: the gripper row
 
     def screened(self, cfg: DiagnoseConfig) -> list[str]:
         return list(cfg.candidates)

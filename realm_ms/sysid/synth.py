@@ -4,6 +4,7 @@
 with the hidden effect(s) added to the default robot, samples the joint positions at ``rate_hz``
 (``control_hz`` targets held in between), adds Gaussian sensor noise, and writes ``train/`` and
 ``heldout/`` npz directories plus ``truth.yaml`` (the hidden model) and ``synth.json``.
+A hidden ``gripper_response`` adds a gripper channel (``gripper``, ``gripper_cmd``: ``gripper.synth_gripper``).
 ``engine="mujoco"`` simulates the truth with the independent MuJoCo reference instead
 (``reference_mujoco.py``: same URDF and law, 1 kHz controller on a converged plant).
 Each trajectory starts with 1 s of settling at its first target that is cut off.
@@ -21,6 +22,7 @@ from realm_ms.errors import InputError
 from realm_ms.sysid.excite import ExciteConfig, excite
 from realm_ms.agents.robot_model import RobotModel
 from realm_ms.sysid.effect_spec import parse_effects
+from realm_ms.sysid.gripper import synth_gripper
 from realm_ms.sysid.timeseries import Trajectory
 
 
@@ -110,12 +112,15 @@ def synth(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None, eval
     out = Path(out_dir)
     from realm_ms.sysid.data_io import write_npz
 
+    grip = model.effect("gripper_response")  # hidden in the gripper: the data gets a gripper channel
     for i, (t, q, q_cmd) in enumerate(sims):
         if not np.all(np.isfinite(q)):
             raise RuntimeError(f"hidden model {hidden!r} diverged in the simulator; lower its parameters")
         noisy = q + rng.normal(0.0, cfg.noise_rad, size=q.shape)
         split = "train" if i < cfg.n_train else "heldout"
-        write_npz(out / split / f"traj_{i:03d}.npz", Trajectory(f"traj_{i:03d}", t, noisy, q_cmd, control_hz=cfg.control_hz))
+        g, g_cmd = synth_gripper(t, rng, grip.values()) if grip is not None else (None, None)
+        write_npz(out / split / f"traj_{i:03d}.npz", Trajectory(f"traj_{i:03d}", t, noisy, q_cmd, gripper=g, gripper_cmd=g_cmd,
+                                                                control_hz=cfg.control_hz))
     model.save(out / "truth.yaml")
     info = {"hidden": hidden, "engine": cfg.engine, "truth": model.params(), "config": asdict(cfg)}
     (out / "synth.json").write_text(json.dumps(info, indent=2, default=float))

@@ -148,7 +148,7 @@ class RealmEnv(BaseEnv):
         self.agent = PandaDroid(self.scene, self._control_freq, self._control_mode, initial_pose=pose,
                                 droid_control=self.config.control, camera=self.cameras)
         if self.robot_model is not None:
-            self.agent.set_robot_model(self.robot_model.actuation())
+            self.agent.set_robot_model(self.robot_model)
 
     def _load_scene(self, options: dict):
         from realm_ms.tasks.objects import build_task_object

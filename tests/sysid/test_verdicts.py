@@ -39,7 +39,7 @@ class ScriptedSpace:
     def library(self):
         from realm_ms.agents.effects import EFFECTS
 
-        return list(EFFECTS)
+        return [n for n, c in EFFECTS.items() if c.acts_on == "arm"]  # as the position space's
 
     def diagnose(self, model, cfg, log):
         from types import SimpleNamespace

@@ -23,6 +23,7 @@ from realm_ms.agents.effects.effect import Effect, EffectConfig, config_from_dic
 from realm_ms.agents.effects.encoder_bias import EncoderBias
 from realm_ms.agents.effects.gain_mismatch import GainMismatch
 from realm_ms.agents.effects.gravity_comp_error import GravityCompError
+from realm_ms.agents.effects.gripper_response import GripperResponse
 from realm_ms.agents.effects.latency import Latency
 from realm_ms.agents.effects.link_mass import LinkMass
 from realm_ms.agents.effects.lugre_friction import LuGreFriction
@@ -39,7 +40,8 @@ from realm_ms.registry import Registry
 EFFECTS: Registry[type[Effect]] = Registry("effect")
 
 for _cls in (CoulombFriction, ViscousDamping, StribeckFriction, SmoothFriction, LuGreFriction, Armature, Payload,
-             GravityCompError, Latency, TargetFilter, TargetInterpolation, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass):
+             GravityCompError, Latency, TargetFilter, TargetInterpolation, GainMismatch, TorqueLimit, Backlash, EncoderBias, LinkMass,
+             GripperResponse):
     EFFECTS.register(_cls.name, _cls)
 
 #: pairs the position data of one gain setting cannot always separate; diagnosis reports both

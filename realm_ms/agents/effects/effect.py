@@ -43,6 +43,9 @@ class Effect(ActuationStage):
     order: ClassVar[int] = 50  # position in the stage chain (lower first)
     build_time: ClassVar[bool] = False
     screened: ClassVar[bool] = True  # a default candidate of position-space diagnosis
+    # what the effect acts on: "arm" (an actuation stage of the arm's controller) or "gripper" (the
+    # gripper controller's response, ``gripper_response.py``: the arm replay leaves it out)
+    acts_on: ClassVar[str] = "arm"
     # (ms per physics step, + ms per arm it is on) the effect adds to a replay rollout on one core
     # (bench/sysid_effect_cost.py measures both): only a hint with which the evaluator spreads a
     # screening batch's effects over its workers, never part of a result

@@ -68,8 +68,9 @@ def waterfall_models(model):
     base = dict(gains=model.gains, joint_physics=model.joint_physics, physics_hz=model.physics_hz)
     if (model.gains, model.joint_physics) != ("polymetis", "none"):
         steps.append((f"gains {model.gains}, joint physics {model.joint_physics}", RobotModel(**base)))
-    for k in range(1, len(model.effects) + 1):
-        steps.append((f"+ {model.effects[k - 1].name}", RobotModel(list(model.effects[:k]), **base)))
+    arm = model.arm_effects  # the gripper's effects: the gripper row, not the arm's replay
+    for k in range(1, len(arm) + 1):
+        steps.append((f"+ {arm[k - 1].name}", RobotModel(list(arm[:k]), **base)))
     return steps
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from realm_ms.errors import InputError
+from realm_ms.sysid.gripper import gripper_json, gripper_lines
 from realm_ms.sysid.timeseries import Trajectory
 from realm_ms.sysid.torque.residual import UNIT, Term, TorqueSet, fit_terms, residual_bands, rmse, terms_of, torque_arm
 from realm_ms.sysid.torque.terms import TERMS, TRACKING_ONLY
@@ -32,12 +33,14 @@ class TorqueCompare:
     noise_floor_per_joint: list[float]
     samples: int
     residual_bands: dict
+    gripper: object = None  # the gripper row (``sysid/gripper.GripperCheck``), set by the API when the data has one
     unit = UNIT
 
     def to_json(self) -> dict:
         return {"unit": UNIT, "rmse_nm": self.rmse, "per_joint_rmse_nm": self.per_joint_rmse,
                 "noise_floor_nm": self.noise_floor, "noise_floor_per_joint_nm": self.noise_floor_per_joint,
-                "samples": self.samples, "residual_bands": self.residual_bands, "flange": no_flange().to_json()}
+                "samples": self.samples, "residual_bands": self.residual_bands, "flange": no_flange().to_json()} \
+            | gripper_json(self.gripper)
 
     def lines(self) -> list[str]:
         """The terminal summary: residual RMSE per joint and by frequency band."""
@@ -45,7 +48,7 @@ class TorqueCompare:
                 f"noise floor ≈ {self.noise_floor:.2e} N·m",
                 "joint       " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)),
                 "RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in self.per_joint_rmse)] + band_lines(self.residual_bands) \
-            + [no_flange().line()]
+            + [no_flange().line()] + gripper_lines(self.gripper)
 
 
 def no_flange():

@@ -192,4 +192,4 @@ TERMS: dict[str, Callable] = {
 
 #: library effects with no torque-space term: they act through the position controller (tracking)
 #: and need ``q_cmd`` in the data
-TRACKING_ONLY = tuple(n for n in EFFECTS if n not in TERMS)
+TRACKING_ONLY = tuple(n for n, c in EFFECTS.items() if n not in TERMS and c.acts_on == "arm")
