@@ -64,6 +64,9 @@ class ScriptedSpace:
     def details(self, diagnosis, model):
         return {}, ""
 
+    def flange(self, start, final):
+        return None  # scripted errors have no arm to put a flange on
+
 
 def test_found_only_at_the_floor():
     v, msg, floor = judge_verdict(5e-3, 1e-4, [_s("latency", 5e-3, 3e-4), _s("viscous_damping", 5e-3, 4e-3)], CFG)
