@@ -176,8 +176,9 @@ def test_workbench_names_and_fits_a_hidden_delay_and_softer_gains(truth):
     fit brings both back within 20 % (the hidden-effect tests' bar) with the held-out error at the
     data's floor. The data reads back bit-equal from every format (above), so this is the answer
     in every format. A shortlist (the delay, its look-alike, the gains, one decoy) and 2 + 1
-    episodes x 4 s keep the four spaces at ~20 s of CPU each; the default list, `auto`'s whole
-    loop and the delay told from its look-alike: the slow test below."""
+    episodes x 4 s keep the four spaces at ~20 s of CPU each (diagnose with the default list is
+    ~35 s per space alone); the default list, `auto`'s whole loop and the delay told from its
+    look-alike: the slow test below."""
     from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose, judging_floor
     from realm_ms.sysid.fit import FitConfig, fit
 
@@ -189,7 +190,8 @@ def test_workbench_names_and_fits_a_hidden_delay_and_softer_gains(truth):
         ranked = [s.effect for s in d.suspects]
         assert ranked[0] == "latency" or "latency" in d.suspects[0].confounded_with, ranked
         assert ranked.index("gain_mismatch") < ranked.index("viscous_damping"), ranked
-        # the linearised start carries the fit to the floor; CMA-ES only polishes (a few generations)
+        # the linearised start carries the fit to the floor, CMA-ES only polishes (with the start's
+        # former 2 fixed iterations every space ends at 1.2-2.6 mrad, over the floor check)
         f = fit(train, held, config=FitConfig(add="latency,gain_mismatch", generations=3, uncertainty=False), evaluator=ev,
                 progress=False, log=lambda *a: None)
     p = f.params
