@@ -120,7 +120,7 @@ def _read_info(root: Path) -> dict:
 def read_lerobot(root: Path, options=None) -> list[Trajectory]:
     """Every episode of a LeRobot v3.0 dataset; DROID's port's ``action.<space>`` features are read
     too and the command chosen by ``options`` (``droid_formats.ReadOptions``)."""
-    from realm_ms.sysid.droid_formats import ARM_DIM, from_columns, to_trajectory
+    from realm_ms.sysid.droid_formats import ARM_DIM, from_columns, on_grid, to_trajectory
 
     info = _read_info(root)
     info_path = root / "meta" / "info.json"
@@ -167,7 +167,8 @@ def read_lerobot(root: Path, options=None) -> list[Trajectory]:
         g = g.sort_values("frame_index") if "frame_index" in g else g
         where = f"{root.name}/episode {ep}"
         state = _stack(g, "observation.state", where)
-        t = g["timestamp"].to_numpy(dtype=np.float64) if "timestamp" in g else np.arange(len(g)) / fps
+        # LeRobot keeps a frame's timestamp within 1e-4 s of frame_index / fps, in float32
+        t = on_grid(g["timestamp"].to_numpy(dtype=np.float64), fps, 1e-4) if "timestamp" in g else np.arange(len(g)) / fps
         qd = _stack(g, vel, where)[:, :7] if vel and vel in g else None
         tau = _stack(g, eff, where)[:, :7] if eff and eff in g else None
         if torque_log:

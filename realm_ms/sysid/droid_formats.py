@@ -226,7 +226,7 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     import pandas as pd
 
     try:
-        df = pd.read_csv(path)
+        df = pd.read_csv(path, float_precision="round_trip")  # pandas' default parser is off by an ulp
     except Exception as e:  # noqa: BLE001 - pandas raises many types for malformed files
         raise DataError(f"{path}: not a readable CSV file ({type(e).__name__}); one header row, one row per step") from None
     groups: dict[str, list[tuple[int, str]]] = {}
@@ -248,6 +248,16 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     return out
 
 
+def on_grid(t: np.ndarray, hz: float, resolution: float) -> np.ndarray:
+    """``t``, or the exact grid ``i / hz`` when every stamp is within ``resolution`` (what the format
+    stores time to) of it: a steady clock then reads back to the same times from a format that
+    stores time coarsely (LeRobot's float32 timestamps, DROID's integer-ms ``trajectory.h5``) as
+    from the others, and replays the same; a jittery clock keeps its own stamps."""
+    t = np.asarray(t, dtype=np.float64)
+    grid = np.arange(len(t)) / hz
+    return grid if np.all(np.abs(t - grid) <= resolution) else t
+
+
 def read_h5(path: Path) -> dict[str, np.ndarray]:
     """Columns of DROID's raw ``trajectory.h5`` (``TrajectoryWriter``): every dataset by its path;
     the step time from ``observation/timestamp/control/step_start`` (ms) when it is there."""
@@ -267,10 +277,11 @@ def read_h5(path: Path) -> dict[str, np.ndarray]:
     for key, scale in (("observation/timestamp/control/step_start", 1e-3),
                        ("observation/timestamp/robot_state/robot_timestamp_seconds", 1.0)):
         if key in out:
-            t = out[key] * scale
+            t = (out[key] - out[key][0]) * scale  # from the first step, then scaled: epoch ms x 1e-3 rounds to 0.2 us
             if key.endswith("seconds") and "observation/timestamp/robot_state/robot_timestamp_nanos" in out:
-                t = t + 1e-9 * out["observation/timestamp/robot_state/robot_timestamp_nanos"]
-            out["t"] = t - t[0]
+                ns = out["observation/timestamp/robot_state/robot_timestamp_nanos"]
+                t = t + 1e-9 * (ns - ns[0])
+            out["t"] = on_grid(t, DROID_HZ, 5e-4)  # a steady 15 Hz clock stored to the ms
             break
     else:
         out.setdefault("control_hz", np.float64(DROID_HZ))  # DROID steps at 15 Hz
@@ -395,20 +406,26 @@ def write_log(out: Path, log: DroidLog, fmt: str) -> Path:
     return path
 
 
-def write_lerobot(root: Path, logs: list[DroidLog], fps: float = DROID_HZ) -> Path:
+def write_lerobot(root: Path, logs: list[DroidLog], fps: float = DROID_HZ, layout: str = "droid") -> Path:
     """A LeRobot v3.0 dataset with the feature names of DROID's own LeRobot port (lerobot's
     ``port_droid``): ``observation.state`` (7 joints + gripper), ``observation.state.joint_position``,
     ``observation.state.gripper_position``, ``action.<space>`` per logged space,
-    ``action.gripper_position``, and ``action`` (joint target + gripper) when the joint target is logged."""
+    ``action.gripper_position``, and ``action`` (joint target + gripper) when the joint target is logged.
+    ``layout="export"``: ``realm export``'s layout instead, ``observation.state`` and ``action`` only."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
     spaces = list(logs[0].commands)
     vec = lambda n: {"dtype": "float32", "shape": (n,), "names": None}  # noqa: E731
-    feats = {"observation.state": vec(8), "observation.state.joint_position": vec(7),
-             "observation.state.gripper_position": vec(1), "action.gripper_position": vec(1),
-             **{f"action.{s}": vec(ARM_DIM[s]) for s in spaces}}
-    if "joint_position" in spaces:
-        feats["action"] = vec(8)
+    if layout == "export":
+        if "joint_position" not in spaces:
+            raise InputError("realm export's layout holds the joint target; the logs have none")
+        feats = {"observation.state": vec(8), "action": vec(8)}
+    else:
+        feats = {"observation.state": vec(8), "observation.state.joint_position": vec(7),
+                 "observation.state.gripper_position": vec(1), "action.gripper_position": vec(1),
+                 **{f"action.{s}": vec(ARM_DIM[s]) for s in spaces}}
+        if "joint_position" in spaces:
+            feats["action"] = vec(8)
     ds = LeRobotDataset.create(repo_id="local/droid_synth", fps=int(round(fps)), features=feats, root=root, use_videos=False)
     for log in logs:
         grip = np.zeros(len(log.t)) if log.gripper is None else log.gripper
@@ -417,10 +434,10 @@ def write_lerobot(root: Path, logs: list[DroidLog], fps: float = DROID_HZ) -> Pa
             f32 = lambda a: np.asarray(a, dtype=np.float32).reshape(-1)  # noqa: E731
             frame = {"observation.state": f32(np.r_[log.q[i], grip[i]]), "observation.state.joint_position": f32(log.q[i]),
                      "observation.state.gripper_position": f32(grip[i]), "action.gripper_position": f32(gcmd[i]),
-                     **{f"action.{s}": f32(log.commands[s][i]) for s in spaces}, "task": "synthetic DROID"}
+                     **{f"action.{s}": f32(log.commands[s][i]) for s in spaces}}
             if "action" in feats:
                 frame["action"] = f32(np.r_[log.commands["joint_position"][i], gcmd[i]])
-            ds.add_frame(frame)
+            ds.add_frame({**{k: v for k, v in frame.items() if k in feats}, "task": "synthetic DROID"})
         ds.save_episode()
     ds.finalize()
     return root

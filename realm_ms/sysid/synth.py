@@ -188,8 +188,10 @@ def synth_droid(hidden: str, out_dir: str | Path, cfg: SynthConfig | None = None
     for i, (t, q, actions, targets) in enumerate(sims):
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(targets))):
             raise RuntimeError(f"hidden model {hidden!r} diverged in the simulator; lower its parameters")
-        commands = {action_space: actions} | ({"joint_position": targets} if log_joint_target else {})
-        noisy = q + rng.normal(0.0, cfg.noise_rad, size=q.shape)
+        # float32 values (LeRobot's storage), so that every format holds the same numbers
+        f32 = lambda a: np.asarray(a, dtype=np.float32).astype(np.float64)  # noqa: E731
+        commands = {action_space: f32(actions)} | ({"joint_position": f32(targets)} if log_joint_target else {})
+        noisy = f32(q + rng.normal(0.0, cfg.noise_rad, size=q.shape))
         logs["train" if i < cfg.n_train else "heldout"].append(
             DroidLog(f"ep_{i:03d}", t, noisy, commands, np.zeros(len(t)), {"position": np.zeros(len(t))}))
     out = Path(out_dir)
