@@ -31,6 +31,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -52,7 +53,7 @@ TASKS = ["REALM-PickApple-v1", "REALM-PushSwitch-v1"]
 EVAL = ["eval", "--policy", "expert", "--tasks", *TASKS, "--perturbations", "Default", "B-HOBJ",
         "--episodes", "2", "--seed", "1234", "--max-steps", "120", "--no-progress"]
 EXPORT = ["export", "--tasks", *TASKS, "--episodes", "2", "--seed", "1234", "--max-steps", "120",
-          "--width", "160", "--height", "96", "--no-progress", "--out", "ds"]
+          "--width", "160", "--height", "96", "--out", "ds"]  # no --no-progress: 84c19c6's export lacks it
 SYNTH = ["sysid", "synth", "--n-train", "2", "--n-heldout", "1", "--duration", "4", "--out", "syn"]
 VERBS = [
     ("compare", ["sysid", "compare", "data", "--workers", "1", "--json", "compare.json"]),
@@ -93,9 +94,10 @@ def open_tree(spec: str, scratch: Path) -> tuple[Path, str, bool]:
     return tree, sha[:7], True
 
 
-def run_realm(tree: Path, cwd: Path, args: list[str], log: str) -> tuple[int, str]:
+def run_realm(tree: Path, cwd: Path, args: list[str], log: str, deps: Path | None) -> tuple[int, str]:
     """Runs `realm ARGS` from tree in cwd; stdout to LOG.stdout (compared), stderr to LOG.stderr."""
-    env = dict(os.environ, PYTHONPATH=str(tree), MS_SKIP_ASSET_DOWNLOAD_PROMPT="1")
+    path = os.pathsep.join(str(p) for p in (tree, deps) if p)
+    env = dict(os.environ, PYTHONPATH=path, MS_SKIP_ASSET_DOWNLOAD_PROMPT="1")
     with open(cwd / f"{log}.stdout", "w") as out, open(cwd.parent / f"{cwd.name}.{log}.stderr", "w") as err:
         rc = subprocess.run([sys.executable, "-m", "realm_ms.cli", *args], cwd=cwd, env=env,
                             stdout=out, stderr=err).returncode
@@ -262,7 +264,7 @@ def rows_for(case: str, a_root: Path, b_root: Path) -> list[dict]:
 
 # --- the run -------------------------------------------------------------------------------------
 
-def run_case(case: str, trees: dict[str, Path], out: Path) -> tuple[list[dict], list[str]]:
+def run_case(case: str, trees: dict[str, Path], out: Path, deps: Path | None) -> tuple[list[dict], list[str]]:
     dirs = {side: out / side / case for side in trees}
     for d in dirs.values():
         d.mkdir(parents=True, exist_ok=True)
@@ -274,7 +276,7 @@ def run_case(case: str, trees: dict[str, Path], out: Path) -> tuple[list[dict], 
         log = re.sub(r"\W+", "_", name)
         for side, tree in trees.items():
             t = time.perf_counter()
-            rc, last = run_realm(tree, dirs[side], args, log)
+            rc, last = run_realm(tree, dirs[side], args, log, deps)
             print(f"  {case}/{name} {side.upper()}: rc {rc}, {time.perf_counter() - t:.0f} s", file=sys.stderr)
             if rc:
                 notes.append(f"{case}/{name} fails in {side.upper()} (rc {rc}): {last}")
@@ -305,6 +307,8 @@ def main(argv=None) -> int:
     ap.add_argument("old", help="commit or tree path")
     ap.add_argument("new", help="commit or tree path")
     ap.add_argument("--out", type=Path, help="where both trees' outputs stay (default: a new /tmp directory)")
+    ap.add_argument("--deps", type=Path, help="packages a tree needs that this venv lacks (pip install --target DIR; "
+                    "84c19c6's export imports rich), after the tree on both trees' PYTHONPATH")
     ap.add_argument("--cases", default=",".join(CASES), help=f"comma-separated, of {','.join(CASES)}")
     a = ap.parse_args(argv)
     cases = a.cases.split(",")
@@ -312,6 +316,7 @@ def main(argv=None) -> int:
         ap.error(f"unknown case(s) {', '.join(unknown)}; known: {', '.join(CASES)}")
     out = (a.out or Path(tempfile.mkdtemp(prefix="realm-equality-"))).resolve()
     scratch = Path(tempfile.mkdtemp(prefix="realm-equality-trees-"))
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # a kill still removes the worktrees
     opened = []
     try:
         trees, labels = {}, {}
@@ -325,7 +330,7 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         rows, notes = [], []
         for case in cases:
-            r, n = run_case(case, trees, out)
+            r, n = run_case(case, trees, out, a.deps)
             rows += r
             notes += n
         wall = time.perf_counter() - t0
@@ -334,7 +339,7 @@ def main(argv=None) -> int:
             git("worktree", "remove", "--force", str(tree))
         shutil.rmtree(scratch, ignore_errors=True)
     print(f"\nOLD = {labels['old']}, NEW = {labels['new']} ({wall / 60:.1f} min, outputs in {out})")
-    print(f"ignored keys: {', '.join(IGNORED)}; all else exact\n")
+    print(f"ignored keys: {', '.join(IGNORED)}; all else exact" + (f"; --deps {a.deps}" if a.deps else "") + "\n")
     print(table(rows))
     for n in notes:
         print(f"- {n}")
