@@ -179,11 +179,11 @@ class Diff:
         elif isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
             self.array(np.asarray(a), np.asarray(b), path)
         elif isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
-            if len(a) != len(b):
-                self.fields += 1
-                self.note(f"{path} length", len(a), len(b))
             for i, (x, y) in enumerate(zip(a, b)):
                 self.walk(x, y, f"{path}[{i}]")
+            if len(a) != len(b):  # after the common part, so a text's first differing line is named first
+                self.fields += 1
+                self.note(f"{path} length", len(a), len(b))
         else:
             self.fields += 1
             if not same(a, b):
