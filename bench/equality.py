@@ -26,6 +26,7 @@ stdlib + numpy; pyarrow, PyAV and PyYAML (the venv's) read the formats the comma
 from __future__ import annotations
 
 import argparse
+import difflib
 import hashlib
 import json
 import os
@@ -150,6 +151,14 @@ def frames(path: Path) -> np.ndarray:
 
 # --- comparing -----------------------------------------------------------------------------------
 
+class Absent:
+    def __repr__(self):
+        return "<absent>"
+
+
+ABSENT = Absent()
+
+
 class Diff:
     """Walks two values together: leaves compared, differing leaves, the first one, the largest gap."""
 
@@ -158,11 +167,16 @@ class Diff:
         self.differ = 0
         self.first: tuple[str, object, object] | None = None
         self.max_abs = 0.0
+        self.paths: list[str] = []  # the first differing fields, for equality.json
+        self.kinds = {"added": 0, "removed": 0, "changed": 0}
 
     def note(self, path: str, a, b, gap: float | None = None):
         self.differ += 1
+        self.kinds["added" if a is ABSENT else "removed" if b is ABSENT else "changed"] += 1
         if self.first is None:
             self.first = (path, a, b)
+        if len(self.paths) < 20:
+            self.paths.append(f"{path.lstrip('.')}: {short(a)} -> {short(b)}")
         if gap is not None and np.isfinite(gap):
             self.max_abs = max(self.max_abs, gap)
 
@@ -173,7 +187,7 @@ class Diff:
                     continue
                 if k not in a or k not in b:
                     self.fields += 1
-                    self.note(f"{path}.{k}", a.get(k, "<absent>"), b.get(k, "<absent>"))
+                    self.note(f"{path}.{k}", a.get(k, ABSENT), b.get(k, ABSENT))
                 else:
                     self.walk(a[k], b[k], f"{path}.{k}")
         elif isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
@@ -205,6 +219,7 @@ class Diff:
             gap = np.abs(a.astype(float) - b.astype(float))[~eq].max() if a.dtype.kind in "fiu" else None
             self.note(f"{path}{list(i)}", a[i].item(), b[i].item(), gap)
             self.differ += len(bad) - 1
+            self.kinds["changed"] += len(bad) - 1
 
 
 def same(a, b) -> bool:
@@ -212,9 +227,24 @@ def same(a, b) -> bool:
     return type(a) is type(b) and (a == b or (isinstance(a, float) and a != a and b != b))
 
 
-def compare_file(a: Path, b: Path) -> Diff:
+def text_diff(a: list[str], b: list[str]) -> Diff:
+    """Lines as a diff sees them: one inserted line is one difference, not every line after it."""
     d = Diff()
+    d.fields = max(len(a), len(b))
+    for op, i1, i2, j1, j2 in difflib.SequenceMatcher(None, a, b, autojunk=False).get_opcodes():
+        if op != "equal":
+            for k in range(max(i2 - i1, j2 - j1)):
+                x = a[i1 + k] if i1 + k < i2 else ABSENT
+                y = b[j1 + k] if j1 + k < j2 else ABSENT
+                d.note(f"line {min(i1 + k, len(a)) + 1}", x, y)
+    return d
+
+
+def compare_file(a: Path, b: Path) -> Diff:
     da, db = read(a), read(b)
+    if all(isinstance(x, list) and all(isinstance(v, str) for v in x) for x in (da, db)):
+        return text_diff(da, db)
+    d = Diff()
     d.walk(da, db)
     if a.suffix == ".mp4" and d.differ:  # bytes differ: are the pictures the same?
         d = Diff()
@@ -244,7 +274,8 @@ def rows_for(case: str, a_root: Path, b_root: Path) -> list[dict]:
     for rel in sorted(fa | fb):
         g = groups.setdefault(group(rel), {"case": case, "output": group(rel), "files": 0, "fields": 0,
                                            "files_differ": 0, "fields_differ": 0, "first": None,
-                                           "max_abs": 0.0})
+                                           "max_abs": 0.0, "added": 0, "removed": 0, "changed": 0,
+                                           "differences": {}})
         g["files"] += 1
         if rel not in fa or rel not in fb:
             g["files_differ"] += 1
@@ -256,6 +287,9 @@ def rows_for(case: str, a_root: Path, b_root: Path) -> list[dict]:
             g["files_differ"] += 1
             g["fields_differ"] += d.differ
             g["max_abs"] = max(g["max_abs"], d.max_abs)
+            g["differences"][rel] = d.paths
+            for k, n in d.kinds.items():
+                g[k] += n
             if g["first"] is None:
                 p, x, y = d.first
                 g["first"] = f"{rel}: {p.lstrip('.')}: {short(x)} -> {short(y)}"
@@ -264,7 +298,8 @@ def rows_for(case: str, a_root: Path, b_root: Path) -> list[dict]:
 
 # --- the run -------------------------------------------------------------------------------------
 
-def run_case(case: str, trees: dict[str, Path], out: Path, deps: Path | None) -> tuple[list[dict], list[str]]:
+def run_case(case: str, trees: dict[str, Path], out: Path, deps: Path | None) -> list[str]:
+    """Runs a case's commands in both trees; the failures, one line each."""
     dirs = {side: out / side / case for side in trees}
     for d in dirs.values():
         d.mkdir(parents=True, exist_ok=True)
@@ -280,13 +315,17 @@ def run_case(case: str, trees: dict[str, Path], out: Path, deps: Path | None) ->
             print(f"  {case}/{name} {side.upper()}: rc {rc}, {time.perf_counter() - t:.0f} s", file=sys.stderr)
             if rc:
                 notes.append(f"{case}/{name} fails in {side.upper()} (rc {rc}): {last}")
-    rows = rows_for(case, dirs["old"], dirs["new"])
+    return notes
+
+
+def compare_case(case: str, out: Path) -> list[dict]:
+    rows = rows_for(case, out / "old" / case, out / "new" / case)
     if case == "eval":  # each tree against itself: in-process vs worker processes
-        for side, d in dirs.items():
-            a, b = d / "run_w1", d / "run_w2"
+        for side in ("old", "new"):
+            a, b = out / side / case / "run_w1", out / side / case / "run_w2"
             if a.is_dir() and b.is_dir():
                 rows += rows_for(f"{side.upper()} w1 vs w2", a, b)
-    return rows, notes
+    return rows
 
 
 def table(rows: list[dict]) -> str:
@@ -294,7 +333,8 @@ def table(rows: list[dict]) -> str:
              "|---|---|---|---|---|---|"]
     for r in rows:
         if r["files_differ"]:
-            res = f"differs ({r['files_differ']}/{r['files']} files, {r['fields_differ']} fields"
+            kinds = ", ".join(f"{r[k]} {k}" for k in ("added", "removed", "changed") if r.get(k))
+            res = f"differs ({r['files_differ']}/{r['files']} files; {kinds or 'file missing'}"
             res += f", max abs {r['max_abs']:.3g})" if r["max_abs"] else ")"
         else:
             res = "equal"
@@ -309,12 +349,33 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, help="where both trees' outputs stay (default: a new /tmp directory)")
     ap.add_argument("--deps", type=Path, help="packages a tree needs that this venv lacks (pip install --target DIR; "
                     "84c19c6's export imports rich), after the tree on both trees' PYTHONPATH")
+    ap.add_argument("--no-run", action="store_true", help="compare the outputs already in --out (runs nothing)")
     ap.add_argument("--cases", default=",".join(CASES), help=f"comma-separated, of {','.join(CASES)}")
     a = ap.parse_args(argv)
     cases = a.cases.split(",")
     if unknown := [c for c in cases if c not in CASES]:
         ap.error(f"unknown case(s) {', '.join(unknown)}; known: {', '.join(CASES)}")
+    if a.no_run and not a.out:
+        ap.error("--no-run needs --out, the outputs of an earlier run")
     out = (a.out or Path(tempfile.mkdtemp(prefix="realm-equality-"))).resolve()
+    if a.no_run:
+        labels, notes, wall = {"old": a.old, "new": a.new}, [], 0.0
+    else:
+        labels, notes, wall = run_trees(a, cases, out)
+    rows = [r for case in cases for r in compare_case(case, out)]
+    print(f"\nOLD = {labels['old']}, NEW = {labels['new']} ({wall / 60:.1f} min, outputs in {out})")
+    print(f"ignored keys: {', '.join(IGNORED)}; all else exact" + (f"; --deps {a.deps}" if a.deps else "") + "\n")
+    print(table(rows))
+    for n in notes:
+        print(f"- {n}")
+    (out / "equality.json").write_text(json.dumps(
+        {"old": labels["old"], "new": labels["new"], "ignored": IGNORED, "rows": rows, "notes": notes},
+        indent=1, default=str))
+    return 0
+
+
+def run_trees(a, cases: list[str], out: Path) -> tuple[dict, list[str], float]:
+    """Opens both trees, runs the cases in each, removes the worktrees it made."""
     scratch = Path(tempfile.mkdtemp(prefix="realm-equality-trees-"))
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # a kill still removes the worktrees
     opened = []
@@ -328,25 +389,12 @@ def main(argv=None) -> int:
             trees[side] = tree
         print(f"OLD {labels['old']}  NEW {labels['new']}  outputs in {out}", file=sys.stderr)
         t0 = time.perf_counter()
-        rows, notes = [], []
-        for case in cases:
-            r, n = run_case(case, trees, out, a.deps)
-            rows += r
-            notes += n
-        wall = time.perf_counter() - t0
+        notes = [n for case in cases for n in run_case(case, trees, out, a.deps)]
+        return labels, notes, time.perf_counter() - t0
     finally:
         for tree in opened:
             git("worktree", "remove", "--force", str(tree))
         shutil.rmtree(scratch, ignore_errors=True)
-    print(f"\nOLD = {labels['old']}, NEW = {labels['new']} ({wall / 60:.1f} min, outputs in {out})")
-    print(f"ignored keys: {', '.join(IGNORED)}; all else exact" + (f"; --deps {a.deps}" if a.deps else "") + "\n")
-    print(table(rows))
-    for n in notes:
-        print(f"- {n}")
-    (out / "equality.json").write_text(json.dumps(
-        {"old": labels["old"], "new": labels["new"], "ignored": IGNORED, "rows": rows, "notes": notes},
-        indent=1, default=str))
-    return 0
 
 
 if __name__ == "__main__":
