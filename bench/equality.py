@@ -1,7 +1,7 @@
 """The same user commands run in two trees, their outputs compared field for field: the evidence that
 a refactor kept behaviour (records, fits, exports equal to the tree before, except wall times).
 
-    python bench/equality.py OLD NEW [--out DIR] [--cases eval,export,sysid,torque]
+    python bench/equality.py OLD NEW [--out DIR] [--deps DIR] [--cases eval,export,sysid,torque] [--no-run]
 
 OLD and NEW are commits (checked out as temporary `git worktree`s under /tmp, removed afterwards) or
 paths of trees. Each tree runs with this interpreter and PYTHONPATH=<tree>, in its own directory
@@ -19,7 +19,8 @@ under OUT with the same relative paths, so path fields agree by construction. Th
   replay's batches went to whichever worker was free, so `--workers 2` did not repeat bit for bit.
 
 Comparison is exact (floats included); IGNORED lists the only keys left out. A differing output shows
-its first differing field with both values, how many fields differ, and the largest |difference|.
+its first differing field with both values, how many fields were added, removed or changed, and the
+largest |difference|; OUT/equality.json lists the first 20 differing fields of each file.
 stdlib + numpy; pyarrow, PyAV and PyYAML (the venv's) read the formats the commands write.
 """
 
