@@ -134,3 +134,23 @@ def test_success_reaches_lerobot_through_final_info():
         assert bool(term[0]) and bool(info["final_info"]["is_success"][0])
     finally:
         vec.close()
+
+
+def test_robot_model_reaches_the_env():
+    """``--env.robot_model droid-aligned``: the env LeRobot builds runs the aligned robot, not the nominal one."""
+    from lerobot.envs.factory import make_env, make_env_config
+
+    import lerobot_env_realm  # noqa: F401
+    from realm_ms.agents.robot_model import load_robot_model
+
+    cfg = make_env_config("realm", task="REALM-PushSwitch-v1", observation_width=32, observation_height=24,
+                          episode_length=5, robot_model="droid-aligned")
+    vec = make_env(cfg, n_envs=1, use_async_envs=False)["REALM-PushSwitch-v1"][0]
+    try:
+        vec.reset(seed=[0])
+        env = vec.envs[0]._env.unwrapped
+        assert env.robot_model is not None
+        assert env.robot_model.names == load_robot_model("droid-aligned").names
+        assert env.config.robot_model == "droid-aligned"
+    finally:
+        vec.close()
