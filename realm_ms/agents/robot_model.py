@@ -177,6 +177,11 @@ class RobotModel:
         """The effects on the arm: what the arm's controller and the arm replay run."""
         return [e for e in self.effects if e.acts_on == "arm"]
 
+    @property
+    def gripper_effects(self) -> list[Effect]:
+        """The effects on the gripper: what the gripper controller runs and the gripper row judges."""
+        return [e for e in self.effects if e.acts_on != "arm"]
+
     def gripper_law(self):
         """The gripper controller's law (``gripper_response``), or None: the nominal gripper."""
         fx = self.effect("gripper_response")

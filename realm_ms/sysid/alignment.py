@@ -261,6 +261,11 @@ class FlangeComparison:
                 f"{len({e.lab for e in self.runs[0].episodes})} lab(s)]")
 
 
+def no_flange() -> FlangeComparison:
+    """Torque space's flange figures: none, and why (``TORQUE_SKIP``)."""
+    return FlangeComparison(skipped=TORQUE_SKIP)
+
+
 def _finite(x):
     """JSON-ready: NaN and inf as null."""
     if isinstance(x, dict):

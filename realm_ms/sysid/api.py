@@ -168,8 +168,9 @@ def compare(data, model=None, heldout=None, workers=None, device=None, segment_s
     trajs = data if isinstance(data, list) else load_dir(data, options=opts)
     if heldout is not None:
         trajs = trajs + load_dir(heldout, options=opts)
-    with _make_space(trajs, [], space, _arm(m), workers, device, identify=False) as sp:
-        res = sp.compare(_arm(m), segment_s=segment_s)
+    arm = _arm(m)
+    with _make_space(trajs, [], space, arm, workers, device, identify=False) as sp:
+        res = sp.compare(arm, segment_s=segment_s)
     res.gripper = _gripper(trajs, m)
     return res
 
@@ -182,8 +183,9 @@ def diagnose(data, model=None, heldout=None, seed: int = 0, workers=None, device
     _arm_only(candidates or (), "candidates (--candidates)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, _arm(m), workers, device) as sp:
-        d = sp.diagnose(_arm(m), DiagnoseConfig(**config), log=log, candidates=candidates)
+    arm = _arm(m)
+    with _make_space(train, held, space, arm, workers, device) as sp:
+        d = sp.diagnose(arm, DiagnoseConfig(**config), log=log, candidates=candidates)
     d.split = _split_block(train, held, seed)
     d.gripper = _gripper(train + held, m)
     return d
@@ -210,9 +212,10 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
         check_output_file(config["checkpoint"], "checkpoint (--checkpoint)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, _arm(m), workers, device, progress) as sp:
-        res = sp.fit(_arm(m), FitConfig(add=add, seed=seed, **config), log=log)
-    res.model.effects += [e for e in m.effects if e.acts_on != "arm"]  # kept as given
+    arm = _arm(m)
+    with _make_space(train, held, space, arm, workers, device, progress) as sp:
+        res = sp.fit(arm, FitConfig(add=add, seed=seed, **config), log=log)
+    res.model.effects += m.gripper_effects  # kept as given
     res.model.provenance.update(_provenance(data, sp, train, held, res.effects, res.heldout_after))
     if out is not None:
         res.model.save(out)
@@ -235,12 +238,13 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
         check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, _arm(m), workers, device, progress) as sp:
-        res = _auto(sp, _arm(m), AutoConfig(seed=seed, **config), progress, log)
+    arm = _arm(m)
+    with _make_space(train, held, space, arm, workers, device, progress) as sp:
+        res = _auto(sp, arm, AutoConfig(seed=seed, **config), progress, log)
     swapped_out = {s.replaces for s in res.steps}
     fitted = [s.effect for s in res.steps if s.effect not in swapped_out]
     res.gripper = _gripper(train + held, m)
-    gripper = [e for e in m.effects if e.acts_on != "arm"]
+    gripper = m.gripper_effects
     if res.gripper is not None and not res.gripper.matches:  # the gripper channel's step: its fitted effect
         gripper = [e for e in gripper if e.name != "gripper_response"] + [res.gripper.effect()]
         fitted.append("gripper_response")
@@ -260,8 +264,9 @@ def report(data, model=None, out: str | Path = "report.html", heldout=None, seed
     check_output_file(out, "out (--out)")
     train, held = _split(data, heldout, seed, command=command)
     m = _model(model)
-    with _make_space(train, held, space, _arm(m), workers, device) as sp:
-        return sp.report(_arm(m) if model is not None else None, Path(out), str(data), log=log, waterfall=waterfall,
+    arm = _arm(m)
+    with _make_space(train, held, space, arm, workers, device) as sp:
+        return sp.report(arm if model is not None else None, Path(out), str(data), log=log, waterfall=waterfall,
                          diagnosis=_load_json(diagnosis, ("baseline", "suspects"), "diagnose --json"),
                          fit_result=_load_json(fit_result, ("history", "before", "after"), "fit --json"),
                          auto=_load_json(auto_result, ("nominal_heldout_rmse", "steps", "final"), "auto --json"))

@@ -31,9 +31,9 @@ import math
 
 import numpy as np
 
-from realm_ms.agents.effects import EFFECTS, confounded_with, make_effect
+from realm_ms.agents.effects import EFFECTS, arm_effects, confounded_with, make_effect
 from realm_ms.errors import InputError
-from realm_ms.sysid.alignment import replay_flange
+from realm_ms.sysid.alignment import no_flange, replay_flange
 from realm_ms.sysid.optimize import Group, LinearStep, copy_effect, evaluate_groups, linearized_step, typical_start
 from realm_ms.sysid.gripper import gripper_json
 from realm_ms.sysid.replay import SegmentSet
@@ -138,9 +138,7 @@ class Diagnosis:
     @property
     def flange(self):
         """The baseline's held-out flange figures (``alignment.FlangeComparison``; torque space: none, and why)."""
-        from realm_ms.sysid.alignment import TORQUE_SKIP, FlangeComparison
-
-        return self.replayed.flange if self.replayed else FlangeComparison(skipped=TORQUE_SKIP)
+        return self.replayed.flange if self.replayed else no_flange()
 
     def to_json(self) -> dict:
         k = UNIT_KEYS[self.unit]
@@ -404,7 +402,7 @@ def unscreened(candidates, seen, library=None) -> list[str]:
     """Library effects (``library``: names, default every effect) neither screened (``candidates``)
     nor already seen (tried or in the model), in library order."""
     if library is None:
-        library = [n for n, c in EFFECTS.items() if c.acts_on == "arm"]
+        library = arm_effects()
     return [n for n in library if n not in candidates and n not in seen]
 
 

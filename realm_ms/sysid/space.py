@@ -81,9 +81,9 @@ class PositionSpace:
         """Motion is all the replay needs (``timeseries.check_identifiable``)."""
 
     def library(self) -> list[str]:
-        from realm_ms.agents.effects import EFFECTS
+        from realm_ms.agents.effects import arm_effects
 
-        return [n for n, c in EFFECTS.items() if c.acts_on == "arm"]  # the gripper's: the gripper row
+        return arm_effects()  # the gripper's: the gripper row
 
     def screened(self, cfg: DiagnoseConfig) -> list[str]:
         return list(cfg.candidates)

@@ -37,9 +37,9 @@ class ScriptedSpace:
         return self
 
     def library(self):
-        from realm_ms.agents.effects import EFFECTS
+        from realm_ms.agents.effects import arm_effects
 
-        return [n for n, c in EFFECTS.items() if c.acts_on == "arm"]  # as the position space's
+        return arm_effects()  # as the position space's
 
     def diagnose(self, model, cfg, log):
         from types import SimpleNamespace

@@ -63,6 +63,12 @@ CONFOUNDS: list[tuple[str, str]] = [
 ]
 
 
+def arm_effects() -> list[str]:
+    """Names of the registered effects that act on the arm (what the arm replay simulates and
+    screens); the others act on the gripper (its own channel, ``sysid/gripper.py``)."""
+    return [n for n, c in EFFECTS.items() if c.acts_on == "arm"]
+
+
 def confounded_with(name: str) -> list[str]:
     return [b if a == name else a for a, b in CONFOUNDS if name in (a, b)]
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from realm_ms.errors import InputError
+from realm_ms.sysid.alignment import no_flange
 from realm_ms.sysid.gripper import gripper_json, gripper_lines
 from realm_ms.sysid.timeseries import Trajectory
 from realm_ms.sysid.torque.residual import UNIT, Term, TorqueSet, fit_terms, residual_bands, rmse, terms_of, torque_arm
@@ -49,13 +50,6 @@ class TorqueCompare:
                 "joint       " + " ".join(f"{f'J{i}':>9}" for i in range(1, 8)),
                 "RMSE [N·m]  " + " ".join(f"{v:9.3f}" for v in self.per_joint_rmse)] + band_lines(self.residual_bands) \
             + [no_flange().line()] + gripper_lines(self.gripper)
-
-
-def no_flange():
-    """Torque space's flange figures: none, and why (``alignment.TORQUE_SKIP``)."""
-    from realm_ms.sysid.alignment import TORQUE_SKIP, FlangeComparison
-
-    return FlangeComparison(skipped=TORQUE_SKIP)
 
 
 @dataclass

@@ -35,7 +35,7 @@ from typing import Callable
 
 import torch
 
-from realm_ms.agents.effects import EFFECTS
+from realm_ms.agents.effects import arm_effects
 
 EPS = 0.01  # rad/s, smooth sign of the friction laws
 
@@ -192,4 +192,4 @@ TERMS: dict[str, Callable] = {
 
 #: library effects with no torque-space term: they act through the position controller (tracking)
 #: and need ``q_cmd`` in the data
-TRACKING_ONLY = tuple(n for n, c in EFFECTS.items() if n not in TERMS and c.acts_on == "arm")
+TRACKING_ONLY = tuple(n for n in arm_effects() if n not in TERMS)
