@@ -1,7 +1,7 @@
 """The same user commands run in two trees, their outputs compared field for field: the evidence that
 a refactor kept behaviour (records, fits, exports equal to the tree before, except wall times).
 
-    python bench/equality.py OLD NEW [--out DIR] [--deps DIR] [--cases eval,export,sysid,torque] [--no-run]
+    python bench/equality.py OLD NEW [--out DIR] [--deps DIR] [--cases eval,export,sysid,...] [--no-run]
 
 OLD and NEW are commits (checked out as temporary `git worktree`s under /tmp, removed afterwards) or
 paths of trees. Each tree runs with this interpreter and PYTHONPATH=<tree>, in its own directory
@@ -16,7 +16,21 @@ under OUT with the same relative paths, so path fields agree by construction. Th
   frictionloss, a torque log), then `compare`, `diagnose`, `fit --add coulomb_friction` in both trees
   on OLD's synthetic data (so a difference in synth does not hide what the verbs do); JSON outputs,
   the fitted MODEL.yaml and the terminal summaries. Sysid runs `--workers 1`: before d672c75 a
-  replay's batches went to whichever worker was free, so `--workers 2` did not repeat bit for bit.
+  replay's batches went to whichever worker was free, so `--workers 2` did not repeat bit for bit;
+- auto: `realm sysid auto --generations 3 --max-steps 2` (auto has no --candidates) on the position
+  data above and on the torque log (MuJoCo-native frictionloss): JSON, MODEL.yaml, printed lines;
+- report: `realm sysid report` on the position data (self-contained HTML, plots as embedded PNGs;
+  it carries no date, so nothing of it is ignored);
+- droid: DROID-format episodes (`synth --engine mujoco --droid-space cartesian_position`, hidden
+  latency 60 ms, written under npz/), then `compare` and `fit --add latency`, both `--command
+  rebuild`, and `align` (its HTML and JSON);
+- batched: `realm eval --policy expert` (as eval) `--backend batched --workers 2` against
+  `--workers 1`, in each tree and across trees. CPU physics only (this machine has no GPU, and no
+  Ray here): 2 groups of one sub-env stepped in turn in-process; the GPU batch of N sub-envs and the
+  Ray backend are not exercised.
+
+A tree whose `realm` refuses a case's command line (argparse: a verb or option it lacks) is named in
+one note, and that case's later steps are not run there (its outputs show as "only in NEW").
 
 Comparison is exact (floats included); IGNORED lists the only keys left out. A differing output shows
 its first differing field with both values, how many fields were added, removed or changed, and the
