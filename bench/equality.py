@@ -63,6 +63,7 @@ IGNORED = {
     "wall_s": "an episode's wall time (eval records)",
     "code_version": "'realm-ms 0.1.0 (<commit>)': names the tree's commit (eval records)",
     "created": "the fit's date (MODEL.yaml provenance)",
+    "seconds": "an alignment's wall time (align JSON; the flange runs in compare/fit/auto JSON write 0.0)",
 }
 
 TASKS = ["REALM-PickApple-v1", "REALM-PushSwitch-v1"]
