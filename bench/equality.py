@@ -364,8 +364,8 @@ def run_case(case: str, trees: dict[str, Path], out: Path, deps: Path | None) ->
             print(f"  {case}/{name} {side.upper()}: rc {rc}, {time.perf_counter() - t:.0f} s", file=sys.stderr)
             if usage:  # argparse refused the command line: the rest of the case is not run in that tree
                 absent.add(side)
-                notes.append(f"{case}: `realm {' '.join(args[:2])}` as the case runs it does not exist in "
-                             f"{side.upper()} ({last}); the case's later steps not run there")
+                notes.append(f"{case}: {side.upper()}'s realm refuses step `{name}` ({last}): a verb or option "
+                             "it lacks; the case's later steps not run there")
             elif rc:
                 notes.append(f"{case}/{name} fails in {side.upper()} (rc {rc}): {last}")
     return notes
