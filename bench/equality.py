@@ -1,7 +1,7 @@
 """The same user commands run in two trees, their outputs compared field for field: the evidence that
 a refactor kept behaviour (records, fits, exports equal to the tree before, except wall times).
 
-    python bench/equality.py OLD NEW [--out DIR] [--deps DIR] [--cases eval,export,sysid,torque] [--no-run]
+    python bench/equality.py OLD NEW [--out DIR] [--deps DIR] [--cases eval,export,sysid,...] [--no-run]
 
 OLD and NEW are commits (checked out as temporary `git worktree`s under /tmp, removed afterwards) or
 paths of trees. Each tree runs with this interpreter and PYTHONPATH=<tree>, in its own directory
@@ -16,7 +16,21 @@ under OUT with the same relative paths, so path fields agree by construction. Th
   frictionloss, a torque log), then `compare`, `diagnose`, `fit --add coulomb_friction` in both trees
   on OLD's synthetic data (so a difference in synth does not hide what the verbs do); JSON outputs,
   the fitted MODEL.yaml and the terminal summaries. Sysid runs `--workers 1`: before d672c75 a
-  replay's batches went to whichever worker was free, so `--workers 2` did not repeat bit for bit.
+  replay's batches went to whichever worker was free, so `--workers 2` did not repeat bit for bit;
+- auto: `realm sysid auto --generations 3 --max-steps 2` (auto has no --candidates) on the position
+  data above and on the torque log (MuJoCo-native frictionloss): JSON, MODEL.yaml, printed lines;
+- report: `realm sysid report` on the position data (self-contained HTML, plots as embedded PNGs;
+  it carries no date, so nothing of it is ignored);
+- droid: DROID-format episodes (`synth --engine mujoco --droid-space cartesian_position`, hidden
+  latency 60 ms, written under npz/), then `compare` and `fit --add latency`, both `--command
+  rebuild`, and `align` (its HTML and JSON);
+- batched: `realm eval --policy expert` (as eval) `--backend batched --workers 2` against
+  `--workers 1`, in each tree and across trees. CPU physics only (this machine has no GPU, and no
+  Ray here): 2 groups of one sub-env stepped in turn in-process; the GPU batch of N sub-envs and the
+  Ray backend are not exercised.
+
+A tree whose `realm` refuses a case's command line (argparse: a verb or option it lacks) is named in
+one note, and that case's later steps are not run there (its outputs show as "only in NEW").
 
 Comparison is exact (floats included); IGNORED lists the only keys left out. A differing output shows
 its first differing field with both values, how many fields were added, removed or changed, and the
@@ -49,6 +63,7 @@ IGNORED = {
     "wall_s": "an episode's wall time (eval records)",
     "code_version": "'realm-ms 0.1.0 (<commit>)': names the tree's commit (eval records)",
     "created": "the fit's date (MODEL.yaml provenance)",
+    "seconds": "an alignment's wall time (align JSON; the flange runs in compare/fit/auto JSON write 0.0)",
 }
 
 TASKS = ["REALM-PickApple-v1", "REALM-PushSwitch-v1"]
@@ -56,7 +71,15 @@ EVAL = ["eval", "--policy", "expert", "--tasks", *TASKS, "--perturbations", "Def
         "--episodes", "2", "--seed", "1234", "--max-steps", "120", "--no-progress"]
 EXPORT = ["export", "--tasks", *TASKS, "--episodes", "2", "--seed", "1234", "--max-steps", "120",
           "--width", "160", "--height", "96", "--out", "ds"]  # no --no-progress: 84c19c6's export lacks it
-SYNTH = ["sysid", "synth", "--n-train", "2", "--n-heldout", "1", "--duration", "4", "--out", "syn"]
+
+
+def synth(out: str = "syn") -> list[str]:
+    return ["sysid", "synth", "--n-train", "2", "--n-heldout", "1", "--duration", "4", "--out", out]
+
+
+SYNTH = synth()
+POSITION = ["--hidden", "coulomb_friction:fc=0.3"]
+TORQUE = ["--engine", "mujoco-native", "--hidden", "frictionloss", "--torque-only"]
 VERBS = [
     ("compare", ["sysid", "compare", "data", "--workers", "1", "--json", "compare.json"]),
     ("diagnose", ["sysid", "diagnose", "data", "--workers", "1", "--json", "diagnose.json"]),
@@ -71,10 +94,29 @@ CASES = {
     "eval": [("eval w1", EVAL + ["--workers", "1", "--out", "run_w1"]),
              ("eval w2", EVAL + ["--workers", "2", "--out", "run_w2"])],
     "export": [("export", EXPORT)],
-    "sysid": [("synth", SYNTH + ["--hidden", "coulomb_friction:fc=0.3"])] + VERBS,
-    "torque": [("synth", SYNTH + ["--engine", "mujoco-native", "--hidden", "frictionloss", "--torque-only"])]
+    "sysid": [("synth", SYNTH + POSITION)] + VERBS,
+    "torque": [("synth", SYNTH + TORQUE)]
     + [(n, a + ["--candidates", TORQUE_CANDIDATES] if n == "diagnose" else a) for n, a in VERBS],
+    # auto has no --candidates: --max-steps 2 and 3 generations bound it
+    "auto": [("synth", SYNTH + POSITION), ("synth torque", synth("syn_torque") + TORQUE)]
+    + [(f"auto{s}", ["sysid", "auto", f"data{s}", "--generations", "3", "--max-steps", "2", "--workers", "1",
+                     "--no-progress", "--out", f"auto{s}.yaml", "--json", f"auto{s}.json"]) for s in ("", "_torque")],
+    "report": [("synth", SYNTH + POSITION),
+               ("report", ["sysid", "report", "data", "--workers", "1", "--out", "report.html"])],
+    # DROID-format episodes (15 Hz, commanded in Cartesian position through DROID's conversion) under synth's npz/
+    "droid": [("synth", SYNTH + ["--engine", "mujoco", "--droid-space", "cartesian_position",
+                                 "--hidden", "latency:delay=0.06"]),
+              ("compare", ["sysid", "compare", "data/npz", "--command", "rebuild", "--workers", "1",
+                           "--json", "compare.json"]),
+              ("fit", ["sysid", "fit", "data/npz", "--add", "latency", "--command", "rebuild", "--generations", "3",
+                       "--workers", "1", "--no-progress", "--out", "fit.yaml", "--json", "fit.json"]),
+              ("align", ["sysid", "align", "data/npz", "--out", "align.html", "--json", "align.json"])],
+    # CPU physics: the batched runner's single-sub-env groups, against the in-process run
+    "batched": [("eval w1", EVAL + ["--workers", "1", "--out", "run_w1"]),
+                ("eval batched", EVAL + ["--backend", "batched", "--workers", "2", "--out", "run_batched"])],
 }
+# each tree's runs of a case compared with each other too: case -> (run, run)
+SELF = {"eval": ("run_w1", "run_w2"), "batched": ("run_w1", "run_batched")}
 
 
 # --- trees ---------------------------------------------------------------------------------------
@@ -96,15 +138,17 @@ def open_tree(spec: str, scratch: Path) -> tuple[Path, str, bool]:
     return tree, sha[:7], True
 
 
-def run_realm(tree: Path, cwd: Path, args: list[str], log: str, deps: Path | None) -> tuple[int, str]:
-    """Runs `realm ARGS` from tree in cwd; stdout to LOG.stdout (compared), stderr to LOG.stderr."""
+def run_realm(tree: Path, cwd: Path, args: list[str], log: str, deps: Path | None) -> tuple[int, str, bool]:
+    """Runs `realm ARGS` from tree in cwd; stdout to LOG.stdout (compared), stderr to LOG.stderr.
+    (exit status, stderr's last line, whether argparse refused the command line)."""
     path = os.pathsep.join(str(p) for p in (tree, deps) if p)
     env = dict(os.environ, PYTHONPATH=path, MS_SKIP_ASSET_DOWNLOAD_PROMPT="1")
     with open(cwd / f"{log}.stdout", "w") as out, open(cwd.parent / f"{cwd.name}.{log}.stderr", "w") as err:
         rc = subprocess.run([sys.executable, "-m", "realm_ms.cli", *args], cwd=cwd, env=env,
                             stdout=out, stderr=err).returncode
     lines = (cwd.parent / f"{cwd.name}.{log}.stderr").read_text().strip().splitlines()
-    return rc, lines[-1] if lines else ""
+    last = lines[-1] if lines else ""
+    return rc, last, rc == 2 and ": error: " in last and any(x.startswith("usage: ") for x in lines)
 
 
 def imports_from(tree: Path) -> str:
@@ -256,7 +300,7 @@ def compare_file(a: Path, b: Path) -> Diff:
 def outputs(root: Path) -> set[str]:
     """Files a case wrote (relative paths), without its input copy."""
     return {str(p.relative_to(root)) for p in root.rglob("*") if p.is_file()
-            and p.relative_to(root).parts[0] != "data"}
+            and not p.relative_to(root).parts[0].startswith("data")}
 
 
 def group(rel: str) -> str:
@@ -304,28 +348,36 @@ def run_case(case: str, trees: dict[str, Path], out: Path, deps: Path | None) ->
     dirs = {side: out / side / case for side in trees}
     for d in dirs.values():
         d.mkdir(parents=True, exist_ok=True)
-    notes = []
+    notes, absent = [], set()  # absent: the trees that lack one of the case's commands or options
     for name, args in CASES[case]:
-        if "data" in args and (dirs["old"] / "syn").is_dir() and not (dirs["old"] / "data").exists():
-            for d in dirs.values():  # the verbs read OLD's synthetic data in both trees
-                shutil.copytree(dirs["old"] / "syn", d / "data")
+        for data in {m[1] for a in args if (m := re.fullmatch(r"(data\w*)(/.*)?", a))}:
+            syn = dirs["old"] / data.replace("data", "syn", 1)
+            if syn.is_dir() and not (dirs["old"] / data).exists():
+                for d in dirs.values():  # the verbs read OLD's synthetic data in both trees
+                    shutil.copytree(syn, d / data)
         log = re.sub(r"\W+", "_", name)
         for side, tree in trees.items():
+            if side in absent:
+                continue
             t = time.perf_counter()
-            rc, last = run_realm(tree, dirs[side], args, log, deps)
+            rc, last, usage = run_realm(tree, dirs[side], args, log, deps)
             print(f"  {case}/{name} {side.upper()}: rc {rc}, {time.perf_counter() - t:.0f} s", file=sys.stderr)
-            if rc:
+            if usage:  # argparse refused the command line: the rest of the case is not run in that tree
+                absent.add(side)
+                notes.append(f"{case}: {side.upper()}'s realm refuses step `{name}` ({last}): a verb or option "
+                             "it lacks; the case's later steps not run there")
+            elif rc:
                 notes.append(f"{case}/{name} fails in {side.upper()} (rc {rc}): {last}")
     return notes
 
 
 def compare_case(case: str, out: Path) -> list[dict]:
     rows = rows_for(case, out / "old" / case, out / "new" / case)
-    if case == "eval":  # each tree against itself: in-process vs worker processes
+    if case in SELF:  # each tree against itself: in-process vs worker processes or the batched runner
         for side in ("old", "new"):
-            a, b = out / side / case / "run_w1", out / side / case / "run_w2"
+            a, b = (out / side / case / run for run in SELF[case])
             if a.is_dir() and b.is_dir():
-                rows += rows_for(f"{side.upper()} w1 vs w2", a, b)
+                rows += rows_for(f"{side.upper()} {' vs '.join(SELF[case])}", a, b)
     return rows
 
 
