@@ -4,6 +4,7 @@ computed by hand: the "simulation" is the measured trajectory itself, or it shif
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -87,3 +88,17 @@ def test_index_json_names_the_labs_of_the_workbench_npz(tmp_path):
     write_npz(tmp_path / "e2.npz", _traj("e2", 15.0, 2, "OWN"))  # a lab of its own, in the file
     labs = {tr.name: tr.meta.get("lab") for tr in load_dir(tmp_path)}
     assert labs == {"e0": "TRI", "e1": None, "e2": "OWN"}
+
+
+def test_the_per_lab_table_has_an_overall_row_only_beside_two_or_more_labs(segset):
+    from realm_ms.sysid.alignment import tabulate
+    from realm_ms.sysid.report.align_report import ModelRun, _labs
+
+    (run,) = replay_flange(segset, [("nominal", segset.meas.copy())]).runs
+
+    def lab_rows(episodes):
+        html = _labs([ModelRun.of(tabulate(episodes, "nominal", 0.0))])[1]
+        return re.findall(r'<tr><td class="l">([^<]*)</td>', html)  # each body row's first cell
+
+    assert lab_rows(run.episodes) == ["LAB_A", "LAB_B", "all"]
+    assert lab_rows([e for e in run.episodes if e.lab == "LAB_A"]) == ["LAB_A"]  # not LAB_A and an equal "all"

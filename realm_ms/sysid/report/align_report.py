@@ -111,7 +111,9 @@ def _labs(runs) -> tuple[str, str]:
     for r in runs:
         header += [f"{r.label}: mm", "lag", "b"]
     body = []
-    for i, lab in enumerate(runs[0].labs + [runs[0].overall]):
+    # with one lab its row is the overall row: showing both would print the same figures twice
+    rows = runs[0].labs + ([runs[0].overall] if len(runs[0].labs) > 1 else [])
+    for i, lab in enumerate(rows):
         row = [lab.lab, lab.episodes, f"{lab.lag_real:.1f}", f"{lab.b_real:.2f}"]
         for r in runs:
             x = (r.labs + [r.overall])[i]
