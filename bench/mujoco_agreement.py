@@ -17,7 +17,6 @@ The MuJoCo runs are the baseline; the figures are the distance to it.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import time
 from pathlib import Path
@@ -52,18 +51,10 @@ def rms_40hz(q: np.ndarray, hz: float, ref: np.ndarray, duration: float) -> np.n
 
 
 def physx(cmd15: np.ndarray, duration: float, integrator: str, model_rate: str | None, hz: float) -> np.ndarray:
-    from realm_ms.agents.control import DroidArmDriver
     from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
 
-    sim = ReplaySimulator(SimConfig(physics_hz=hz, model_rate=model_rate))
-    make = sim._driver
-
-    def driver(n, act):  # the replay's own driver with the integrator swapped
-        d = make(n, act)
-        return DroidArmDriver(d.model, dataclasses.replace(d.config, integrator=integrator), n, "cpu", act)
-
-    sim._driver = driver
-    return replay(sim, cmd15, hz, duration)
+    return replay(ReplaySimulator(SimConfig(physics_hz=hz, model_rate=model_rate, integrator=integrator)), cmd15, hz,
+                  duration)
 
 
 def seeds_arg(s: str) -> list[int]:

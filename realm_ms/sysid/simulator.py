@@ -39,11 +39,12 @@ class SimConfig:
     joint_physics: str = "none"
     coriolis_feedforward: bool = True
     model_rate: str | None = None  # DroidControlConfig.model_rate; None = the benchmark's default
+    integrator: str | None = None  # DroidControlConfig.integrator; None = the benchmark's default
 
     def control_config(self):
         from realm_ms.agents.control import DroidControlConfig
 
-        kw = {} if self.model_rate is None else {"model_rate": self.model_rate}
+        kw = {k: v for k, v in (("model_rate", self.model_rate), ("integrator", self.integrator)) if v is not None}
         return DroidControlConfig(gains=self.gains, coriolis_feedforward=self.coriolis_feedforward,
                                   joint_physics=self.joint_physics, **kw)
 

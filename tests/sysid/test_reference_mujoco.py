@@ -3,8 +3,6 @@ PhysX plant measured against it."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 import torch
@@ -91,18 +89,10 @@ def reference_log():
 
 
 def _physx_rms(reference_log, integrator: str, hz: float = 120.0) -> np.ndarray:
-    from realm_ms.agents.control import DroidArmDriver
     from realm_ms.sysid.simulator import ReplaySimulator, SimConfig
 
     cmd15, ref, duration = reference_log
-    sim = ReplaySimulator(SimConfig(physics_hz=hz))
-    make = sim._driver
-
-    def driver(n, act):
-        d = make(n, act)
-        return DroidArmDriver(d.model, dataclasses.replace(d.config, integrator=integrator), n, "cpu", act)
-
-    sim._driver = driver
+    sim = ReplaySimulator(SimConfig(physics_hz=hz, integrator=integrator))
     return _rms_on_40hz_grid(_replay(sim, cmd15, hz, duration), hz, ref, duration)
 
 
