@@ -4,7 +4,8 @@ One loop for both spaces (``space.py``; the space diagnoses, fits a suspect and 
 Each round ranks the effects still missing from the current model (``diagnose``, screening
 with the model's own parameters re-tuned), fits the best suspect jointly with everything already
 kept (``fit`` with refit, started at the screened values) -- and each look-alike the diagnosis could
-not tell from it (``contenders``, until one reaches the floor), keeping the one that fits best --
+not tell from it (``contenders``, until one reaches the floor), keeping the one that fits best, or
+one with fewer parameters that fits as well within noise (``_simplest``) --
 and **keeps the step only when the held-out RMSE falls by more than noise allows**: by at least
 ``min_gain`` of its current value and by at least ``min_floor_drop`` x the judging floor (a fit that
 only absorbed noise on the train split does not lower the held-out error that much). A rejected suspect is not tried again; the
@@ -81,24 +82,53 @@ def step_label(step: dict) -> str:
     return f"{step['effect']} for {step['replaces']}" if step.get("replaces") else f"+{step['effect']}"
 
 
-def contenders(cands: list, screened, tried: set[str], library=None) -> list:
-    """The top suspect and the look-alikes the diagnosis could not tell from it (``confounded_with``,
-    among the remaining candidates): its screening ranks them on a short re-tune, so each is fitted
-    in full and the data decide (on MuJoCo's ``frictionloss`` the screening ranks Coulomb first, and
-    the full fits give smooth friction 0.47 mrad against Coulomb's 0.53). Last, the top suspect's
-    look-alikes the screening leaves out (not in ``screened``: LuGre friction, too costly to screen)
-    but the space can model (``library``, default every effect), from their typical values; the
-    caller stops at the first contender that reaches the floor."""
+def contenders(cands: list, screened, tried: set[str], library=None, near: float = 0.0) -> list:
+    """The top suspect, then the screened suspects the diagnosis could not tell from it: those its
+    screening named confounded (``confounded_with``), its documented look-alikes (``CONFOUNDS``)
+    that the screening found helping, and any it put within ``near`` of the top's held-out error.
+    The screening ranks them on a short re-tune, so each is fitted in full and the data decide (on
+    MuJoCo's ``frictionloss`` the screening ranks Coulomb first without naming smooth friction
+    beside it, and the full fits give smooth friction 0.47 mrad against Coulomb's 0.53). Last, the
+    top suspect's look-alikes the screening leaves out (not in ``screened``: LuGre friction, too
+    costly to screen) but the space can model (``library``, default every effect), from their
+    typical values. The caller stops at the first contender that reaches the floor (but for a
+    near one with fewer parameters, ``_simplest``)."""
     from realm_ms.agents.effects import confounded_with
 
     top = cands[0]
-    out = [top] + [c for c in cands[1:] if c.effect in top.confounded_with]
+    alike = set(top.confounded_with) | set(confounded_with(top.effect))
+    out = [top] + [c for c in cands[1:] if c.effect in alike or _near(c, top, near)]
     for name in confounded_with(top.effect):
         if (name not in screened and name not in tried and all(c.effect != name for c in out)
                 and (library is None or name in library)):
             out.append(Suspect(name, 0.0, float("nan"), float("nan"), {},
                                f"a look-alike of {top.effect} that diagnose does not screen"))
     return out
+
+
+def _near(sus, top, near: float) -> bool:
+    """The screening put ``sus`` within ``near`` of the top suspect's held-out error (NaN: not screened)."""
+    return bool(sus.heldout_rmse_after - top.heldout_rmse_after < near)
+
+
+def n_free(effect: str) -> int:
+    """Free parameters of an effect spec ("viscous_damping": 7, "lugre_friction": 18)."""
+    from realm_ms.sysid.effect_spec import parse_effects
+
+    return sum(len(fx.free_params) for fx in parse_effects(effect))
+
+
+def _simplest(fitted: list, cfg: "AutoConfig", floor: float) -> list:
+    """The step's fits, the one to keep first: the best held-out error, unless a contender with fewer
+    free parameters ends within a step's bar of it (LuGre's σ₂ is a viscous damper: on a damped
+    plant it fits a hair better than ``viscous_damping`` with 11 parameters more, and a superset that
+    wins by less than noise allows is not what the data show); then the others, best first."""
+    fitted = sorted(fitted, key=lambda x: x[0])
+    best = fitted[0]
+    simpler = [x for x in fitted if n_free(x[1].effect) < n_free(best[1].effect)
+               and x[0] - best[0] < _bar_of(cfg, x[0], floor)]
+    pick = min(simpler, key=lambda x: (n_free(x[1].effect), x[0])) if simpler else best
+    return [pick] + [x for x in fitted if x is not pick]
 
 
 def _bar_of(cfg: AutoConfig, current: float, floor: float) -> float:
@@ -129,14 +159,17 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
     held-out error by a step's bar; within that bar of it the pair is confounded and said so. Each
     pair is contested once; every fit counts against ``max_fits``, and a look-alike the diagnosis
     does not screen (LuGre: as costly as the other fits together) only within ``unscreened_within``
-    x the floor, as in its step. Returns (model, current, fits)."""
+    x the floor: farther off it waits for the next kept step (on MuJoCo's LuGre plant the screened
+    friction laws end at 4.1-4.5x the floor, and viscous damping, kept next, brings the model within
+    it). Returns (model, current, fits)."""
     for effect in list(pending):
+        waiting = []
         for sus in pending.pop(effect):
-            costly = sus.effect not in screened and current > cfg.unscreened_within * floor
-            if fits >= cfg.max_fits or costly:
-                log(f"auto: {sus.effect} not contested against {effect}: "
-                    + (f"{cfg.max_fits} fits spent" if not costly else
-                       f"not screened, and {current / floor:.1f}x the floor is above {cfg.unscreened_within:g}x"))
+            if sus.effect not in screened and current > cfg.unscreened_within * floor:
+                waiting.append(sus)
+                continue
+            if fits >= cfg.max_fits:
+                log(f"auto: {sus.effect} not contested against {effect}: {cfg.max_fits} fits spent")
                 continue
             base = model.copy()
             base.effects = [fx for fx in base.effects if fx.name != _bare(effect)]
@@ -155,6 +188,11 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
                 confounded.append({"effects": [effect, sus.effect], "heldout_rmse": [current, after]})
             log(f"auto: {sus.effect} for {effect}: held-out {current:.3e} -> {after:.3e} {space.unit} "
                 + ("(confounded: within what noise allows)" if tie else f"({effect} stays)"))
+        else:
+            if waiting:
+                pending[effect] = waiting
+                log(f"auto: {', '.join(s.effect for s in waiting)} not yet contested against {effect}: not screened, "
+                    f"and {current / floor:.1f}x the floor is above {cfg.unscreened_within:g}x")
     return model, current, fits
 
 
@@ -262,13 +300,19 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         if not cands:
             log("auto: no remaining suspect helps")
             break
-        fitted = []
-        for sus in contenders(cands, screened, tried, space.library())[: cfg.max_fits - fits]:
+        fitted, deferred = [], []
+        top = cands[0]
+        near = _bar_of(cfg, top.heldout_rmse_after, floor)
+        reached = None  # free parameters of the first contender that reached the floor
+        for sus in contenders(cands, screened, tried, space.library(), near)[: cfg.max_fits - fits]:
+            if reached is not None and not (n_free(sus.effect) < reached and _near(sus, top, near)):
+                continue  # at the floor: only a simpler near-tie could still be preferred
             best = min((a for a, _, _ in fitted), default=None)
             if sus.effect not in screened and best is not None and best > cfg.unscreened_within * floor:
-                log(f"auto: not fitting {sus.effect} (a look-alike diagnose does not screen): the best screened "
-                    f"contender ends at {best / floor:.1f}x the floor, above "
-                    f"{cfg.unscreened_within:g}x")
+                log(f"auto: not fitting {sus.effect} yet (a look-alike diagnose does not screen): the best screened "
+                    f"contender ends at {best / floor:.1f}x the floor, above {cfg.unscreened_within:g}x; it is "
+                    "contested in the kept effect's place once a later step brings the model within that")
+                deferred.append(sus)
                 continue
             tried.add(sus.effect)
             fits += 1
@@ -276,14 +320,15 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
             f = space.fit_suspect(model, sus, cfg, log=quiet)
             bar.update(1)
             fitted.append((f.heldout_after, sus, f))
-            if fitted[-1][0] <= dcfg.found_factor * floor:
-                break  # at the floor: no look-alike can do visibly better
+            if reached is None and f.heldout_after <= dcfg.found_factor * floor:
+                reached = n_free(sus.effect)
+        fitted = _simplest(fitted, cfg, floor)
         if len(fitted) > 1:
-            fitted.sort(key=lambda x: x[0])
             for after, sus, _ in fitted[1:]:
                 steps.append(AutoStep(sus.effect, {}, after, False, d.verdict))
+                better = "which fits better" if after >= fitted[0][0] else "as good within noise, with fewer parameters"
                 log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} {unit} (a look-alike of "
-                    f"{fitted[0][1].effect}, which fits better)")
+                    f"{fitted[0][1].effect}, {better})")
         after, sus, f = fitted[0]
         kept = current - after >= _bar_of(cfg, current, floor)
         steps.append(AutoStep(sus.effect, _rounded(f.params), after, kept, d.verdict))
@@ -297,8 +342,8 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         # can rank them either way (DROID-format data, a delay and softer gains: the delay fitted
         # alone ends 50 % above the target filter, and 10x below it once the gains are in): each is
         # contested again, best first, once a later step is kept
-        if len(fitted) > 1:
-            pending[sus.effect] = [s for _, s, _ in fitted[1:]]
+        if len(fitted) > 1 or deferred:
+            pending[sus.effect] = [s for _, s, _ in fitted[1:]] + deferred
         if current <= dcfg.found_factor * floor or _added(steps) >= cfg.max_steps:
             break
         bar.set_description("auto: diagnosing")
