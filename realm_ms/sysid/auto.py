@@ -38,7 +38,9 @@ FRICTION_QD = np.concatenate([-np.linspace(1.5, 0.05, 30), np.linspace(0.05, 1.5
 @dataclass
 class AutoConfig:
     max_steps: int = 4  # kept effects at most
-    max_fits: int = 6  # fits at most (kept + rejected)
+    # fits at most (kept + rejected) that replay the data (``Space.fit_replays``: torque space's are
+    # the screening's own least squares, free)
+    max_fits: int = 6
     generations: int = 10  # CMA-ES generations per fit (the linearised start does most of the work)
     # CMA-ES stops once its best train loss improved by < 0.2 % over this many generations (``fit``
     # waits 6): auto runs up to ``max_fits`` fits, and each generation replays the search data once
@@ -97,7 +99,7 @@ def contenders(cands: list, screened, tried: set[str], library=None, near: float
 
     top = cands[0]
     alike = set(top.confounded_with) | set(confounded_with(top.effect))
-    out = [top] + [c for c in cands[1:] if c.effect in alike or _near(c, top, near)]
+    out = [top] + [c for c in cands[1:] if _bare(c.effect) in alike or _near(c, top, near)]
     for name in confounded_with(top.effect):
         if (name not in screened and name not in tried and all(c.effect != name for c in out)
                 and (library is None or name in library)):
@@ -157,7 +159,7 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
     (a target filter imitates "slow + late" better than a pure delay while softer gains are still
     unmodelled, and loses once they are). It takes the place (a swap step) when it lowers the
     held-out error by a step's bar; within that bar of it the pair is confounded and said so. Each
-    pair is contested once; every fit counts against ``max_fits``, and a look-alike the diagnosis
+    pair is contested once; every fit that replays the data counts against ``max_fits``, and a look-alike the diagnosis
     does not screen (LuGre: as costly as the other fits together) only within ``unscreened_within``
     x the floor: farther off it waits for the next kept step (on MuJoCo's LuGre plant the screened
     friction laws end at 4.1-4.5x the floor, and viscous damping, kept next, brings the model within
@@ -165,7 +167,7 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
     for effect in list(pending):
         waiting = []
         for sus in pending.pop(effect):
-            if sus.effect not in screened and current > cfg.unscreened_within * floor:
+            if _bare(sus.effect) not in screened and current > cfg.unscreened_within * floor:
                 waiting.append(sus)
                 continue
             if fits >= cfg.max_fits:
@@ -173,7 +175,7 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
                 continue
             base = model.copy()
             base.effects = [fx for fx in base.effects if fx.name != _bare(effect)]
-            fits += 1
+            fits += space.fit_replays
             f = space.fit_suspect(base, sus, cfg, log=lambda *a: None)
             after, bar = f.heldout_after, _bar_of(cfg, current, floor)
             swap = current - after >= bar
@@ -304,18 +306,19 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         top = cands[0]
         near = _bar_of(cfg, top.heldout_rmse_after, floor)
         reached = None  # free parameters of the first contender that reached the floor
-        for sus in contenders(cands, screened, tried, space.library(), near)[: cfg.max_fits - fits]:
+        todo = contenders(cands, screened, tried, space.library(), near)
+        for sus in todo[: cfg.max_fits - fits] if space.fit_replays else todo:
             if reached is not None and not (n_free(sus.effect) < reached and _near(sus, top, near)):
                 continue  # at the floor: only a simpler near-tie could still be preferred
             best = min((a for a, _, _ in fitted), default=None)
-            if sus.effect not in screened and best is not None and best > cfg.unscreened_within * floor:
+            if _bare(sus.effect) not in screened and best is not None and best > cfg.unscreened_within * floor:
                 log(f"auto: not fitting {sus.effect} yet (a look-alike diagnose does not screen): the best screened "
                     f"contender ends at {best / floor:.1f}x the floor, above {cfg.unscreened_within:g}x; it is "
                     "contested in the kept effect's place once a later step brings the model within that")
                 deferred.append(sus)
                 continue
             tried.add(sus.effect)
-            fits += 1
+            fits += space.fit_replays
             bar.set_description(f"auto: fitting {sus.effect}")
             f = space.fit_suspect(model, sus, cfg, log=quiet)
             bar.update(1)
@@ -326,7 +329,8 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         if len(fitted) > 1:
             for after, sus, _ in fitted[1:]:
                 steps.append(AutoStep(sus.effect, {}, after, False, d.verdict))
-                better = "which fits better" if after >= fitted[0][0] else "as good within noise, with fewer parameters"
+                better = ("which fits better" if after >= fitted[0][0] else
+                          "which fits as well within noise with fewer parameters")
                 log(f"auto: + {sus.effect}: held-out {current:.3e} -> {after:.3e} {unit} (a look-alike of "
                     f"{fitted[0][1].effect}, {better})")
         after, sus, f = fitted[0]

@@ -2,7 +2,8 @@
 
 A space is bound to the data (train and held-out trajectories) and answers the verbs in its own
 unit: ``compare``, ``diagnose``, ``fit``, ``report``, and, for ``auto``'s one loop (``auto.py``),
-``fit_suspect`` (fit a ranked suspect onto the current model), ``details`` (what only this space
+``fit_suspect`` (fit a ranked suspect onto the current model; ``fit_replays``: whether that costs a
+replay of the data, counted against ``auto``'s fit budget), ``details`` (what only this space
 reports), ``flange`` (the held-out flange figures of the start and final models, or why there are
 none), ``screened`` / ``library`` (which effects the diagnosis ranks / could rank) and
 ``replay_floor`` (its own error on a plant that matches it). ``api.py`` picks the space once
@@ -28,6 +29,7 @@ class PositionSpace:
 
     name = "position"
     unit = "rad"
+    fit_replays = True  # ``fit_suspect`` replays the data (CMA-ES): counted against auto's ``max_fits``
 
     def __init__(self, train: list[Trajectory], heldout: list[Trajectory], evaluator, progress: bool = True):
         self.train, self.heldout, self.evaluator, self.progress = train, heldout, evaluator, progress

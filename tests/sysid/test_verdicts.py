@@ -21,6 +21,7 @@ class ScriptedSpace:
     effects ``names`` ends at ``heldout(names, added)``, its model holding both."""
 
     unit = "rad"
+    fit_replays = True
     train: list = []
 
     def __init__(self, nominal, rounds, heldout, noise=1e-4):
@@ -197,6 +198,21 @@ def test_auto_fits_a_documented_look_alike_the_screening_did_not_name():
     out = auto_mod.auto(space, progress=False, log=lambda *a: None).to_json()
     assert space.fitted == ["coulomb_friction", "smooth_friction"]
     assert [s["effect"] for s in out["steps"]] == ["smooth_friction"] and out["final"]["verdict"] == "at_floor"
+
+
+@pytest.mark.parametrize("fit_replays", [True, False])
+def test_auto_fit_budget_counts_only_fits_that_replay_the_data(fit_replays):
+    """``max_fits`` bounds replays (position space's CMA-ES fits); torque space's fits are the
+    screening's own least squares (``fit_replays`` False), so one fit of budget does not stop them."""
+    from realm_ms.sysid import auto as auto_mod
+
+    first = [_s("coulomb_friction", 5.3e-3, 0.6e-3), _s("smooth_friction", 5.3e-3, 0.9e-3)]
+    held = {"coulomb_friction": 1.53e-3, "smooth_friction": 0.28e-3}
+    space = ScriptedSpace(5.3e-3, [first], lambda names, added: held[added])
+    space.fit_replays = fit_replays
+    out = auto_mod.auto(space, progress=False, log=lambda *a: None, config=auto_mod.AutoConfig(max_fits=1)).to_json()
+    assert space.fitted == (["coulomb_friction"] if fit_replays else ["coulomb_friction", "smooth_friction"])
+    assert [s["effect"] for s in out["steps"]] == [space.fitted[-1]]
 
 
 @pytest.mark.parametrize("viscous_after", [0.30e-3, 0.38e-3])

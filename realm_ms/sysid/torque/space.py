@@ -152,6 +152,7 @@ class TorqueSpace:
 
     name = "torque"
     unit = UNIT
+    fit_replays = False  # ``fit_suspect`` takes the screening's least squares: free, not one of auto's ``max_fits``
 
     def __init__(self, train: list[Trajectory], heldout: list[Trajectory]):
         self.train, self.heldout = train, heldout
