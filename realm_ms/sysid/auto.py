@@ -346,8 +346,11 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         # can rank them either way (DROID-format data, a delay and softer gains: the delay fitted
         # alone ends 50 % above the target filter, and 10x below it once the gains are in): each is
         # contested again, best first, once a later step is kept
+        # a look-alike the step could not afford to fit is contested first: the others lost to the
+        # kept effect on data already (LuGre's plant: Coulomb kept, Stribeck and smooth friction
+        # lost; with viscous damping kept next, only LuGre reaches the floor in Coulomb's place)
         if len(fitted) > 1 or deferred:
-            pending[sus.effect] = [s for _, s, _ in fitted[1:]] + deferred
+            pending[sus.effect] = deferred + [s for _, s, _ in fitted[1:]]
         if current <= dcfg.found_factor * floor or _added(steps) >= cfg.max_steps:
             break
         bar.set_description("auto: diagnosing")

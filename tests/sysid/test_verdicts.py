@@ -239,25 +239,31 @@ def test_auto_prefers_fewer_parameters_when_a_superset_fits_as_well_within_noise
 def test_auto_contests_lugre_once_a_later_step_brings_the_model_near_the_floor(viscous_after):
     """MuJoCo's LuGre plant: Stribeck friction, fitted first, ends at 4.4x the floor, too far off for
     the costly LuGre fit; viscous damping is kept next. Within 3x the floor, LuGre is fitted in
-    Stribeck's place jointly with the damping and takes it (a swap step, at the floor); at 3.3x it
-    still waits, and the message lists it among the effects not screened."""
+    Stribeck's place jointly with the damping, before Coulomb (fitted and beaten in the first step),
+    and takes it (a swap step, at the floor); at 3.3x it still waits, Coulomb is contested, and the
+    message lists LuGre among the effects not screened."""
     from realm_ms.sysid import auto as auto_mod
 
-    rounds = [[_s("stribeck_friction", 7.5e-3, 1.2e-3)], [_s("viscous_damping", 1.2e-3, 0.6e-3)]]
+    rounds = [[_s("stribeck_friction", 7.5e-3, 1.2e-3), _s("coulomb_friction", 7.5e-3, 1.3e-3)],
+              [_s("viscous_damping", 1.2e-3, 0.6e-3)]]
 
     def heldout(names, added):
-        return {"stribeck_friction": 1.2e-3, "viscous_damping": viscous_after, "lugre_friction": 0.29e-3}[added]
+        return {"stribeck_friction": 1.2e-3, "coulomb_friction": 1.3e-3 if not names else 1.0e-3,
+                "viscous_damping": viscous_after, "lugre_friction": 0.29e-3}[added]
 
     space = ScriptedSpace(7.5e-3, rounds, heldout)
-    res = auto_mod.auto(space, progress=False, log=lambda *a: None)
+    res = auto_mod.auto(space, progress=False, log=lambda *a: None, config=auto_mod.AutoConfig(max_fits=4))
     out = res.to_json()
     labels = [auto_mod.step_label(s) for s in out["steps"]]
     if viscous_after < 3 * 0.27e-3:
-        assert space.fitted == ["stribeck_friction", "viscous_damping", "lugre_friction"]
+        # LuGre, never fitted, is contested before Coulomb, which lost its step already: with 4 fits
+        # Coulomb's second contest is the one left out
+        assert space.fitted == ["stribeck_friction", "coulomb_friction", "viscous_damping", "lugre_friction"]
         assert labels == ["+stribeck_friction", "+viscous_damping", "lugre_friction for stribeck_friction"]
         assert sorted(res.model.names) == ["lugre_friction", "viscous_damping"] and out["final"]["verdict"] == "at_floor"
         return
-    assert space.fitted == ["stribeck_friction", "viscous_damping"] and labels == ["+stribeck_friction", "+viscous_damping"]
+    assert space.fitted == ["stribeck_friction", "coulomb_friction", "viscous_damping", "coulomb_friction"]
+    assert labels == ["+stribeck_friction", "+viscous_damping"]
     assert "lugre_friction" in out["details"]["message"].split("not screened here:")[1]
 
 
