@@ -158,43 +158,43 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
     step is kept: each look-alike is fitted in its place, jointly with everything else kept
     (a target filter imitates "slow + late" better than a pure delay while softer gains are still
     unmodelled, and loses once they are). It takes the place (a swap step) when it lowers the
-    held-out error by a step's bar; within that bar of it the pair is confounded and said so. Each
-    pair is contested once; every fit that replays the data counts against ``max_fits``, and a look-alike the diagnosis
+    held-out error by a step's bar, and the next look-alike is fitted in the new holder's place (on
+    DROID-format data the target ramp takes the filter's place, and the delay the ramp's); within
+    that bar of it the pair is confounded and said so. Each look-alike is contested once; every fit that replays the data counts against ``max_fits``, and a look-alike the diagnosis
     does not screen (LuGre: as costly as the other fits together) only within ``unscreened_within``
     x the floor: farther off it waits for the next kept step (on MuJoCo's LuGre plant the screened
     friction laws end at 4.1-4.5x the floor, and viscous damping, kept next, brings the model within
     it). Returns (model, current, fits)."""
     for effect in list(pending):
-        waiting = []
+        holder, waiting = effect, []  # the look-alike holding the place: the kept effect, or the last swap
         for sus in pending.pop(effect):
             if _bare(sus.effect) not in screened and current > cfg.unscreened_within * floor:
                 waiting.append(sus)
                 continue
             if fits >= cfg.max_fits:
-                log(f"auto: {sus.effect} not contested against {effect}: {cfg.max_fits} fits spent")
+                log(f"auto: {sus.effect} not contested against {holder}: {cfg.max_fits} fits spent")
                 continue
             base = model.copy()
-            base.effects = [fx for fx in base.effects if fx.name != _bare(effect)]
+            base.effects = [fx for fx in base.effects if fx.name != _bare(holder)]
             fits += space.fit_replays
             f = space.fit_suspect(base, sus, cfg, log=lambda *a: None)
             after, bar = f.heldout_after, _bar_of(cfg, current, floor)
             swap = current - after >= bar
-            steps.append(AutoStep(sus.effect, _rounded(f.params) if swap else {}, after, swap, verdict, effect))
+            steps.append(AutoStep(sus.effect, _rounded(f.params) if swap else {}, after, swap, verdict, holder))
             if swap:
-                log(f"auto: {sus.effect} for {effect}: held-out {current:.3e} -> {after:.3e} {space.unit} "
+                log(f"auto: {sus.effect} for {holder}: held-out {current:.3e} -> {after:.3e} {space.unit} "
                     "(swapped: the look-alike fits better with the rest refitted)")
-                model, current = f.model, after
-                break
+                model, current, holder = f.model, after, sus.effect
+                continue
             tie = abs(after - current) < bar
             if tie:
-                confounded.append({"effects": [effect, sus.effect], "heldout_rmse": [current, after]})
-            log(f"auto: {sus.effect} for {effect}: held-out {current:.3e} -> {after:.3e} {space.unit} "
-                + ("(confounded: within what noise allows)" if tie else f"({effect} stays)"))
-        else:
-            if waiting:
-                pending[effect] = waiting
-                log(f"auto: {', '.join(s.effect for s in waiting)} not yet contested against {effect}: not screened, "
-                    f"and {current / floor:.1f}x the floor is above {cfg.unscreened_within:g}x")
+                confounded.append({"effects": [holder, sus.effect], "heldout_rmse": [current, after]})
+            log(f"auto: {sus.effect} for {holder}: held-out {current:.3e} -> {after:.3e} {space.unit} "
+                + ("(confounded: within what noise allows)" if tie else f"({holder} stays)"))
+        if waiting:
+            pending.setdefault(holder, []).extend(waiting)
+            log(f"auto: {', '.join(s.effect for s in waiting)} not yet contested against {holder}: not screened, "
+                f"and {current / floor:.1f}x the floor is above {cfg.unscreened_within:g}x")
     return model, current, fits
 
 

@@ -349,6 +349,29 @@ def test_the_search_budget_takes_whole_train_trajectories_in_order_and_keeps_the
     assert [t.name for t in sub.train] == ["t0", "t2"] and sub.heldout is held
 
 
+def test_auto_contests_each_look_alike_against_the_one_that_took_the_place():
+    """DROID-format data, a delay and softer gains: the target filter is kept first (the delay, its
+    screened look-alike, fits worse alone; the target ramp, not screened, waits at 7x the floor).
+    Once the gains are kept (2.9x), the ramp takes the filter's place, and the delay then takes the
+    ramp's: every look-alike is fitted against whichever holds the place, not only the first."""
+    from realm_ms.sysid import auto as auto_mod
+
+    rounds = [[_s("target_filter", 30e-3, 6.2e-3), _s("latency", 30e-3, 9.5e-3)], [_s("gain_mismatch", 6.2e-3, 3e-3)]]
+
+    def heldout(names, added):
+        if not names:
+            return {"target_filter": 6.19e-3, "latency": 9.53e-3}[added]
+        return {"gain_mismatch": 2.6e-3, "target_interpolation": 2.35e-3, "latency": 0.22e-3}[added]
+
+    space = ScriptedSpace(30e-3, rounds, heldout, noise=0.85e-3)
+    res = auto_mod.auto(space, progress=False, log=lambda *a: None)
+    out = res.to_json()
+    assert space.fitted == ["target_filter", "latency", "gain_mismatch", "target_interpolation", "latency"]
+    assert [auto_mod.step_label(s) for s in out["steps"]] == [
+        "+target_filter", "+gain_mismatch", "target_interpolation for target_filter", "latency for target_interpolation"]
+    assert sorted(res.model.names) == ["gain_mismatch", "latency"] and out["final"]["verdict"] == "at_floor"
+
+
 @pytest.mark.parametrize("case,joint,max_fits", [("swap", 0.35e-3, 6), ("confounded", 2.80e-3, 6), ("stays", 4.0e-3, 6),
                                                   ("budget", 0.35e-3, 5)])
 def test_auto_contests_an_earlier_look_alike_again_once_a_later_step_is_kept(case, joint, max_fits):
