@@ -241,8 +241,7 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
     arm = _arm(m)
     with _make_space(train, held, space, arm, workers, device, progress) as sp:
         res = _auto(sp, arm, AutoConfig(seed=seed, **config), progress, log)
-    swapped_out = {s.replaces for s in res.steps}
-    fitted = [s.effect for s in res.steps if s.effect not in swapped_out]
+    fitted = [s.effect for s in res.steps if s.effect.split(":")[0] in res.model.names]  # not swapped out
     res.gripper = _gripper(train + held, m)
     gripper = m.gripper_effects
     if res.gripper is not None and not res.gripper.matches:  # the gripper channel's step: its fitted effect

@@ -174,15 +174,16 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
             if fits >= cfg.max_fits:
                 log(f"auto: {sus.effect} not contested against {holder}: {cfg.max_fits} fits spent")
                 continue
-            base = model.copy()
-            base.effects = [fx for fx in base.effects if fx.name != _bare(holder)]
             fits += space.fit_replays
+            base = _without(space, model, holder, sus.effect)
             f = space.fit_suspect(base, sus, cfg, log=lambda *a: None)
             after, bar = f.heldout_after, _bar_of(cfg, current, floor)
             swap = current - after >= bar
-            steps.append(AutoStep(sus.effect, _rounded(f.params) if swap else {}, after, swap, verdict, holder))
+            # what it takes the place of: the holder, and a kept effect it contains
+            place = " and ".join([holder] + [n for n in model.names if n != _bare(holder) and n not in base.names])
+            steps.append(AutoStep(sus.effect, _rounded(f.params) if swap else {}, after, swap, verdict, place))
             if swap:
-                log(f"auto: {sus.effect} for {holder}: held-out {current:.3e} -> {after:.3e} {space.unit} "
+                log(f"auto: {sus.effect} for {place}: held-out {current:.3e} -> {after:.3e} {space.unit} "
                     "(swapped: the look-alike fits better with the rest refitted)")
                 model, current, holder = f.model, after, sus.effect
                 continue
@@ -196,6 +197,23 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
             log(f"auto: {', '.join(s.effect for s in waiting)} not yet contested against {holder}: not screened, "
                 f"and {current / floor:.1f}x the floor is above {cfg.unscreened_within:g}x")
     return model, current, fits
+
+
+def _without(space, model: RobotModel, *effects: str) -> RobotModel:
+    """The model a suspect (the last of ``effects``) is fitted onto: less the others (the kept effect
+    it is contested against) and, where the fit replays the data, less what the suspect contains
+    (``Effect.contains``). A kept viscous damper beside a LuGre fit is a second copy of its σ₂, and
+    the replayed fit starts in a worse basin (MuJoCo's LuGre plant, seed 0: LuGre in Coulomb's place
+    beside the kept damper ends at 0.58 mrad, alone at 0.28); torque space's least squares, which
+    fitted the suspect jointly with the model in its screening, keeps the model whole."""
+    from realm_ms.agents.effects import effect_class
+
+    out = model.copy()
+    drop = {_bare(e) for e in effects[:-1]}
+    if space.fit_replays:
+        drop |= set(effect_class(_bare(effects[-1])).contains)
+    out.effects = [fx for fx in out.effects if fx.name not in drop]
+    return out
 
 
 def _start_spec(effect: str, params: dict[str, float]) -> str:
@@ -320,7 +338,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
             tried.add(sus.effect)
             fits += space.fit_replays
             bar.set_description(f"auto: fitting {sus.effect}")
-            f = space.fit_suspect(model, sus, cfg, log=quiet)
+            f = space.fit_suspect(_without(space, model, sus.effect), sus, cfg, log=quiet)
             bar.update(1)
             fitted.append((f.heldout_after, sus, f))
             if reached is None and f.heldout_after <= dcfg.found_factor * floor:

@@ -43,6 +43,9 @@ class Effect(ActuationStage):
     order: ClassVar[int] = 50  # position in the stage chain (lower first)
     build_time: ClassVar[bool] = False
     screened: ClassVar[bool] = True  # a default candidate of position-space diagnosis
+    # library effects this one contains as a special case (LuGre's σ₂ q̇ is viscous damping): a model
+    # holding both is degenerate, so ``auto`` fits this one in place of those
+    contains: ClassVar[tuple[str, ...]] = ()
     # what the effect acts on: "arm" (an actuation stage of the arm's controller) or "gripper" (the
     # gripper controller's response, ``gripper_response.py``: the arm replay leaves it out)
     acts_on: ClassVar[str] = "arm"

@@ -75,6 +75,7 @@ class LuGreFriction(ImplicitJointTorque):
     # about as much as all other candidates together. Position-space ``auto`` fits it as a
     # look-alike of the friction law it ranks first, when none of the screened laws reaches the floor
     screened = False
+    contains = ("viscous_damping",)  # σ₂ q̇
 
     @classmethod
     def param_specs(cls, config):
