@@ -39,8 +39,9 @@ FRICTION_QD = np.concatenate([-np.linspace(1.5, 0.05, 30), np.linspace(0.05, 1.5
 class AutoConfig:
     max_steps: int = 4  # kept effects at most
     # fits at most (kept + rejected) that replay the data (``Space.fit_replays``: torque space's are
-    # the screening's own least squares, free)
-    max_fits: int = 6
+    # the screening's own least squares, free): a step fits up to four contenders, and on
+    # DROID-format data (a delay and softer gains) two steps and the delay's re-contest take 7
+    max_fits: int = 8
     generations: int = 10  # CMA-ES generations per fit (the linearised start does most of the work)
     # CMA-ES stops once its best train loss improved by < 0.2 % over this many generations (``fit``
     # waits 6): auto runs up to ``max_fits`` fits, and each generation replays the search data once
@@ -168,6 +169,8 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
     for effect in list(pending):
         holder, waiting = effect, []  # the look-alike holding the place: the kept effect, or the last swap
         for sus in pending.pop(effect):
+            if current <= cfg.diagnose.found_factor * floor:
+                break  # at the floor: no look-alike can do visibly better
             if _bare(sus.effect) not in screened and current > cfg.unscreened_within * floor:
                 waiting.append(sus)
                 continue
