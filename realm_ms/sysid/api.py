@@ -226,7 +226,7 @@ def fit(data, add: str, out: str | Path | None = None, model=None, heldout=None,
 def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: int = 0, workers=None, device=None,
          progress: bool = True, log=print, space: str | None = None, command: str | None = None, **config):
     """diagnose -> fit the top suspect -> re-diagnose ... until the floor (``sysid/auto.py``): an ``AutoResult``."""
-    from realm_ms.sysid.auto import AutoConfig, auto as _auto
+    from realm_ms.sysid.auto import AutoConfig, auto as _auto, bare_effect
     from realm_ms.validate import check_output_file
 
     for key in ("generations", "max_steps"):
@@ -241,7 +241,7 @@ def auto(data, out: str | Path | None = None, model=None, heldout=None, seed: in
     arm = _arm(m)
     with _make_space(train, held, space, arm, workers, device, progress) as sp:
         res = _auto(sp, arm, AutoConfig(seed=seed, **config), progress, log)
-    fitted = [s.effect for s in res.steps if s.effect.split(":")[0] in res.model.names]  # not swapped out
+    fitted = [s.effect for s in res.steps if bare_effect(s.effect) in res.model.names]  # not swapped out
     res.gripper = _gripper(train + held, m)
     gripper = m.gripper_effects
     if res.gripper is not None and not res.gripper.matches:  # the gripper channel's step: its fitted effect

@@ -100,7 +100,7 @@ def contenders(cands: list, screened, tried: set[str], library=None, near: float
 
     top = cands[0]
     alike = set(top.confounded_with) | set(confounded_with(top.effect))
-    out = [top] + [c for c in cands[1:] if _bare(c.effect) in alike or _near(c, top, near)]
+    out = [top] + [c for c in cands[1:] if bare_effect(c.effect) in alike or _near(c, top, near)]
     for name in confounded_with(top.effect):
         if (name not in screened and name not in tried and all(c.effect != name for c in out)
                 and (library is None or name in library)):
@@ -148,7 +148,7 @@ def _added(steps: list[AutoStep]) -> int:
     return len([s for s in steps if s.kept and not s.replaces])
 
 
-def _bare(effect: str) -> str:
+def bare_effect(effect: str) -> str:
     """The effect's name in a model, from a step's spec ("link_mass:fit_com=true" -> "link_mass")."""
     return effect.split(":")[0]
 
@@ -161,8 +161,9 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
     unmodelled, and loses once they are). It takes the place (a swap step) when it lowers the
     held-out error by a step's bar, and the next look-alike is fitted in the new holder's place (on
     DROID-format data the target ramp takes the filter's place, and the delay the ramp's); within
-    that bar of it the pair is confounded and said so. Each look-alike is contested once; every fit that replays the data counts against ``max_fits``, and a look-alike the diagnosis
-    does not screen (LuGre: as costly as the other fits together) only within ``unscreened_within``
+    that bar of it the pair is confounded and said so. Each look-alike is contested once (none once
+    the model is at the floor); every fit that replays the data counts against ``max_fits``, and a
+    look-alike the diagnosis does not screen (LuGre: as costly as the other fits together) only within ``unscreened_within``
     x the floor: farther off it waits for the next kept step (on MuJoCo's LuGre plant the screened
     friction laws end at 4.1-4.5x the floor, and viscous damping, kept next, brings the model within
     it). Returns (model, current, fits)."""
@@ -171,7 +172,7 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
         for sus in pending.pop(effect):
             if current <= cfg.diagnose.found_factor * floor:
                 break  # at the floor: no look-alike can do visibly better
-            if _bare(sus.effect) not in screened and current > cfg.unscreened_within * floor:
+            if bare_effect(sus.effect) not in screened and current > cfg.unscreened_within * floor:
                 waiting.append(sus)
                 continue
             if fits >= cfg.max_fits:
@@ -183,7 +184,7 @@ def _recontest(space, model: RobotModel, current: float, floor: float, pending: 
             after, bar = f.heldout_after, _bar_of(cfg, current, floor)
             swap = current - after >= bar
             # what it takes the place of: the holder, and a kept effect it contains
-            place = " and ".join([holder] + [n for n in model.names if n != _bare(holder) and n not in base.names])
+            place = " and ".join([holder] + [n for n in model.names if n != bare_effect(holder) and n not in base.names])
             steps.append(AutoStep(sus.effect, _rounded(f.params) if swap else {}, after, swap, verdict, place))
             if swap:
                 log(f"auto: {sus.effect} for {place}: held-out {current:.3e} -> {after:.3e} {space.unit} "
@@ -212,9 +213,9 @@ def _without(space, model: RobotModel, *effects: str) -> RobotModel:
     from realm_ms.agents.effects import effect_class
 
     out = model.copy()
-    drop = {_bare(e) for e in effects[:-1]}
+    drop = {bare_effect(e) for e in effects[:-1]}
     if space.fit_replays:
-        drop |= set(effect_class(_bare(effects[-1])).contains)
+        drop |= set(effect_class(bare_effect(effects[-1])).contains)
     out.effects = [fx for fx in out.effects if fx.name not in drop]
     return out
 
@@ -332,7 +333,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
             if reached is not None and not (n_free(sus.effect) < reached and _near(sus, top, near)):
                 continue  # at the floor: only a simpler near-tie could still be preferred
             best = min((a for a, _, _ in fitted), default=None)
-            if _bare(sus.effect) not in screened and best is not None and best > cfg.unscreened_within * floor:
+            if bare_effect(sus.effect) not in screened and best is not None and best > cfg.unscreened_within * floor:
                 log(f"auto: not fitting {sus.effect} yet (a look-alike diagnose does not screen): the best screened "
                     f"contender ends at {best / floor:.1f}x the floor, above {cfg.unscreened_within:g}x; it is "
                     "contested in the kept effect's place once a later step brings the model within that")
@@ -366,10 +367,10 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         # this step's look-alikes were fitted before the effects still missing are modelled, which
         # can rank them either way (DROID-format data, a delay and softer gains: the delay fitted
         # alone ends 50 % above the target filter, and 10x below it once the gains are in): each is
-        # contested again, best first, once a later step is kept
-        # a look-alike the step could not afford to fit is contested first: the others lost to the
-        # kept effect on data already (LuGre's plant: Coulomb kept, Stribeck and smooth friction
-        # lost; with viscous damping kept next, only LuGre reaches the floor in Coulomb's place)
+        # contested again once a later step is kept. First a look-alike the step could not afford to
+        # fit, then the others, best first: those lost to the kept effect on data already (LuGre's
+        # plant: Coulomb kept, Stribeck and smooth friction lost; with viscous damping kept next,
+        # only LuGre reaches the floor in Coulomb's place)
         if len(fitted) > 1 or deferred:
             pending[sus.effect] = deferred + [s for _, s, _ in fitted[1:]]
         if current <= dcfg.found_factor * floor or _added(steps) >= cfg.max_steps:
@@ -391,7 +392,7 @@ def auto(space, model: RobotModel | None = None, config: AutoConfig | None = Non
         verdict = "unexplained"
     details, note = space.details(d, model)
     details["searched_train"] = [t.name for t in space.train]
-    confounded = [c for c in confounded if _bare(c["effects"][0]) in model.names]
+    confounded = [c for c in confounded if bare_effect(c["effects"][0]) in model.names]
     msg = _message(verdict, nominal, current, floor, kept, model.params_at_bounds(),
                    unscreened(screened, tried | set(model.names), space.library()), dcfg.found_factor, unit)
     msg += confounded_note(confounded, unit)
