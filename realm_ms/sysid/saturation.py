@@ -2,8 +2,9 @@
 them. A position replay does not score them.
 
 With a motor at its limit the loop is open: the arm swings on its own dynamics and small differences
-grow. On the MuJoCo-native payload plant (CHANGELOG, 2026-11-25), MuJoCo's own plant integrated at 1 kHz
-instead of 4 kHz ends 11 mrad away on joint 6 within one such burst, and 2.7 mrad at 16 kHz. No
+grow. On the MuJoCo-native payload plant (measured 2026-11-25, no command in the repository),
+MuJoCo's own plant integrated at 1 kHz instead of 4 kHz ends 11 mrad away on joint 6 within one
+such burst, and 2.7 mrad at 16 kHz. No
 120 Hz replay can follow there, whatever its model: one burst in 4.5 % of a log's samples held
 a true payload's replay at 1.36 mrad, 0.42 mrad without it. The samples still drive the simulation
 (segments run through them); only their residual is left out of RMSEs, fits and verdicts.
