@@ -22,11 +22,12 @@ def pytest_addoption(parser):
 #: the files that take minutes (a trained checkpoint, diagnose and fit runs, renders), longest first:
 #: the workers start on them, so that the suite does not end with one worker running a long file
 #: alone while the other idles (`make test` passes --no-loadscope-reorder, so this is the schedule)
-LONG_FILES = ("lerobot/test_example.py", "sysid/test_hidden.py", "lerobot/test_policy_transfer.py",
-              "bad_inputs/test_bad_inputs.py", "sysid/test_torque.py", "expert/test_expert.py",
-              "perturbations/test_perturbations_env.py", "sysid/test_link_mass.py", "sysid/test_optimize.py",
-              "test_rendering.py", "sysid/test_sysid_cli.py", "sysid/test_effects.py", "tasks/test_env_pick_apple.py",
-              "eval/test_batched.py", "tasks/test_envs.py", "tasks/test_env_reproducible.py")
+LONG_FILES = ("sysid/test_droid_formats.py", "lerobot/test_export.py", "sysid/test_sysid_cli.py", "sysid/test_hidden.py",
+              "bad_inputs/test_bad_inputs.py", "lerobot/test_example.py", "sysid/test_optimize.py", "expert/test_expert.py",
+              "sysid/test_effects.py", "eval/test_installed_cli.py", "perturbations/test_perturbations_env.py",
+              "tasks/test_env_pick_apple.py", "perturbations/test_physics_neutral.py", "eval/test_policy_latency.py",
+              "eval/test_batched.py", "assets/test_pipeline.py", "eval/test_e2e.py", "sysid/test_torque.py",
+              "lerobot/test_policy_transfer.py", "sysid/test_reference_mujoco.py", "tasks/test_envs.py")
 
 
 def _start_rank(item) -> int:

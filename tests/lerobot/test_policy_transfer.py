@@ -1,5 +1,11 @@
 """A checkpoint that `lerobot-train` wrote from a `realm export` reaches the env unchanged.
 
+`make test` runs the fast check first: a LeRobot checkpoint whose network is made to emit the
+demo's actions (normalised as its saved processors expect) replays the demo through `realm export
+--policy lerobot:CKPT`, so the adapter's state and action layout, its post-processing and the
+gripper convention are the export's. The overfit run below (`make test-slow`, ~6 min of CPU) adds
+a checkpoint that `lerobot-train` really wrote:
+
 One expert demonstration of PushSwitch (the expert closes the gripper at once, then reaches and
 presses, so both the seven joints and the gripper move) is exported, a small ACT is overfit to it
 with LeRobot's `lerobot-train` (run through `realm_ms.lerobot.train`, which decodes each video once:
@@ -53,6 +59,47 @@ def _episode(root: Path) -> tuple[np.ndarray, np.ndarray, dict]:
     return np.stack(df["observation.state"].values), np.stack(df["action"].values), side
 
 
+def test_a_checkpoint_that_emits_the_demos_actions_replays_the_demo(tmp_path, monkeypatch):
+    import torch
+    from lerobot.configs.policies import PreTrainedConfig
+    from lerobot.policies.act.modeling_act import ACTPolicy
+    from lerobot.policies.factory import make_pre_post_processors
+
+    from realm_ms.eval.policies.lerobot import make_tiny_policy
+
+    demo = tmp_path / "demo"
+    _export(demo, "--success-only")
+    s_demo, a_demo, side = _episode(demo)
+    assert side["success"] and a_demo[:, 7].max() > 0.5  # the demo closes the gripper
+    ckpt = make_tiny_policy(tmp_path / "ckpt", image_size=(H, W))
+    # the saved post-processor is affine per dimension: action = mean + std * output
+    _, post = make_pre_post_processors(PreTrainedConfig.from_pretrained(ckpt), pretrained_path=str(ckpt))
+    mean, std = (post(torch.full((1, 8), float(v))).numpy()[0] for v in (0.0, 1.0))
+    std = std - mean
+    calls = []
+
+    def emit_demo(self, obs):  # each call is the next chunk of the demo (replan_every = chunk = 8)
+        t = 8 * len(calls)
+        calls.append(obs["observation.state"].shape)
+        idx = np.minimum(np.arange(t, t + 8), len(a_demo) - 1)
+        return torch.from_numpy(((a_demo[idx] - mean) / std).astype(np.float32))[None]
+
+    monkeypatch.setattr(ACTPolicy, "predict_action_chunk", emit_demo)
+    monkeypatch.setattr(ACTPolicy, "reset", lambda self: calls.clear())
+    replay = tmp_path / "replay"
+    _export(replay, "--policy", f"lerobot:{ckpt}", max_steps=len(s_demo))
+    s_rep, a_rep, side_rep = _episode(replay)
+    assert calls and calls[0] == (1, 8) and side_rep["policy"] == f"lerobot:{ckpt}" and side_rep["success"]
+    n = len(s_rep)
+    assert n >= len(s_demo) - 5
+    # the actions reach the env as the export stored them, and the arm and gripper follow the demo
+    np.testing.assert_allclose(a_rep[:n], a_demo[:n], atol=1e-4)
+    travel = np.abs(s_demo[:, :7] - s_demo[0, :7]).max()
+    # float32 normalisation round-off (~1e-5 rad in the targets) grows to ~2 mrad through the press;
+    # a joint-order or gripper-convention error puts a joint ~1 rad off
+    assert travel > 0.3 and np.abs(s_rep[:, :8] - s_demo[:n, :8]).max() < 1e-2
+
+
 @pytest.fixture(scope="module")
 def overfit(tmp_path_factory):
     root = tmp_path_factory.mktemp("transfer")
@@ -70,6 +117,7 @@ def overfit(tmp_path_factory):
     return root, demo, run / "checkpoints" / "last" / "pretrained_model"
 
 
+@pytest.mark.slow
 def test_checkpoint_features_are_the_export_and_env_features(overfit):
     from lerobot.envs.factory import make_env_config
     from lerobot.envs.utils import env_to_policy_features
@@ -85,6 +133,7 @@ def test_checkpoint_features_are_the_export_and_env_features(overfit):
     assert set(trained) <= set(info["features"])
 
 
+@pytest.mark.slow
 def test_overfit_policy_replays_the_demo_through_lerobot_policy(overfit):
     root, demo, ckpt = overfit
     s_demo, a_demo, side = _episode(demo)
@@ -104,6 +153,7 @@ def test_overfit_policy_replays_the_demo_through_lerobot_policy(overfit):
     assert np.abs(s_rep[:, 7] - s_demo[:, 7]).max() < 0.15 and s_rep[-1, 7] > 0.8
 
 
+@pytest.mark.slow
 def test_lerobot_eval_runs_the_checkpoint_to_success(overfit, tmp_path, monkeypatch):
     from lerobot.scripts import lerobot_eval
 
