@@ -59,7 +59,17 @@ def _episode(root: Path) -> tuple[np.ndarray, np.ndarray, dict]:
     return np.stack(df["observation.state"].values), np.stack(df["action"].values), side
 
 
-def test_a_checkpoint_that_emits_the_demos_actions_replays_the_demo(tmp_path, monkeypatch):
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory) -> Path:
+    """One successful expert episode of PushSwitch, exported; it closes the gripper."""
+    out = tmp_path_factory.mktemp("transfer") / "demo"
+    _export(out, "--success-only")
+    _, a_demo, side = _episode(out)
+    assert side["success"] and a_demo[:, 7].max() > 0.5
+    return out
+
+
+def test_a_checkpoint_that_emits_the_demos_actions_replays_the_demo(demo, tmp_path, monkeypatch):
     import torch
     from lerobot.configs.policies import PreTrainedConfig
     from lerobot.policies.act.modeling_act import ACTPolicy
@@ -67,15 +77,12 @@ def test_a_checkpoint_that_emits_the_demos_actions_replays_the_demo(tmp_path, mo
 
     from realm_ms.eval.policies.lerobot import make_tiny_policy
 
-    demo = tmp_path / "demo"
-    _export(demo, "--success-only")
-    s_demo, a_demo, side = _episode(demo)
-    assert side["success"] and a_demo[:, 7].max() > 0.5  # the demo closes the gripper
+    s_demo, a_demo, _ = _episode(demo)
     ckpt = make_tiny_policy(tmp_path / "ckpt", image_size=(H, W))
     # the saved post-processor is affine per dimension: action = mean + std * output
     _, post = make_pre_post_processors(PreTrainedConfig.from_pretrained(ckpt), pretrained_path=str(ckpt))
-    mean, std = (post(torch.full((1, 8), float(v))).numpy()[0] for v in (0.0, 1.0))
-    std = std - mean
+    mean, one = (post(torch.full((1, 8), float(v))).numpy()[0] for v in (0.0, 1.0))
+    std = one - mean
     calls = []
 
     def emit_demo(self, obs):  # each call is the next chunk of the demo (replan_every = chunk = 8)
@@ -101,10 +108,8 @@ def test_a_checkpoint_that_emits_the_demos_actions_replays_the_demo(tmp_path, mo
 
 
 @pytest.fixture(scope="module")
-def overfit(tmp_path_factory):
-    root = tmp_path_factory.mktemp("transfer")
-    demo = root / "demo"
-    _export(demo, "--success-only")
+def overfit(demo):
+    root = demo.parent
     run = root / "train"
     # realm_ms.lerobot.train is LeRobot's lerobot-train with each video decoded once (the recipe's trainer)
     _run([sys.executable, "-m", "realm_ms.lerobot.train", "--dataset.repo_id=realm/demo", f"--dataset.root={demo}",
@@ -136,8 +141,7 @@ def test_checkpoint_features_are_the_export_and_env_features(overfit):
 @pytest.mark.slow
 def test_overfit_policy_replays_the_demo_through_lerobot_policy(overfit):
     root, demo, ckpt = overfit
-    s_demo, a_demo, side = _episode(demo)
-    assert side["success"] and a_demo[:, 7].max() > 0.5  # the demo closes the gripper
+    s_demo = _episode(demo)[0]
     replay = root / "replay"
     _export(replay, "--policy", f"lerobot:{ckpt}", max_steps=len(s_demo))
     s_rep, _, side_rep = _episode(replay)

@@ -183,9 +183,9 @@ def test_workbench_names_and_fits_a_hidden_delay_and_softer_gains(truth):
     fit brings both back within 20 % (the hidden-effect tests' bar) with the held-out error at the
     data's floor. The data reads back bit-equal from every format (above), so this is the answer
     in every format. A shortlist (the delay, its look-alike, the gains, one decoy) and 2 + 1
-    episodes x 4 s keep the four spaces at ~20 s of CPU each (diagnose with the default list is
-    ~35 s per space alone); the default list, `auto`'s whole loop and the delay told from its
-    look-alike: the slow test below."""
+    episodes x 4 s keep each space at ~20 s of CPU (diagnose with the default list is ~35 s
+    per space alone; `make test` fits FIT_FAST's space); the default list, `auto`'s whole loop and
+    the delay told from its look-alike: the slow test below."""
     from realm_ms.sysid.diagnose import DiagnoseConfig, diagnose, judging_floor
     from realm_ms.sysid.fit import FitConfig, fit
 
