@@ -3,8 +3,8 @@
     .venv/bin/python examples/train_eval_loop.py [--out outputs/train_eval] [--device cpu] [--quick]
 
 Stages (each resumes: rerunning the same command skips finished work):
-1. demos      `realm export` of scripted-expert demonstrations, one dataset per task (tasks export in
-              parallel processes), seeds from 100000 so evaluation seeds (from 0) are never demo seeds;
+1. demos      `realm export` of scripted-expert demonstrations, one dataset per task (its episodes over
+              `--workers` env processes), seeds from 100000 so evaluation seeds (from 0) are never demo seeds;
 2. dataset    LeRobot's `aggregate_datasets` merges them into one training set;
 3. train      `lerobot-train` an ACT policy from scratch (nothing can be downloaded) on it; the loss
               curve goes to `learning_curve.csv/.png`; every saved checkpoint is then evaluated on
@@ -20,8 +20,8 @@ Stages (each resumes: rerunning the same command skips finished work):
               final table (success with Wilson intervals, fine-tuning delta with Newcombe's interval)
               on stdout and in `summary.json`.
 
-`realm eval` runs in this process (``realm()``: the installed command's own ``main``), so the imports
-and the renderer's set-up are paid once; exports and training are child processes.
+`realm eval` and `realm export` run in this process (``realm()``: the installed command's own
+``main``), so the imports and the renderer's set-up are paid once; training is a child process.
 `--quick` is the CI variant: every stage with a handful of steps (no success expected).
 """
 
@@ -112,15 +112,8 @@ def stage(msg: str) -> None:
     print(f"\n=== {msg}", flush=True)
 
 
-def realm_command() -> list[str]:
-    """The installed `realm` script beside this interpreter (the command a user types)."""
-    script = Path(sys.executable).parent / "realm"
-    return [str(script)] if script.exists() else [sys.executable, "-m", "realm_ms.cli"]
-
-
 def child_env(threads: int | None = 1) -> dict:
-    """Environment of the child commands; ``threads``: torch CPU threads (1 for env processes, which
-    run side by side; all cores for training)."""
+    """Environment of the `lerobot-train` process; ``threads``: its torch CPU threads."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
                MS_SKIP_ASSET_DOWNLOAD_PROMPT="1")
     if threads:
@@ -131,39 +124,25 @@ def child_env(threads: int | None = 1) -> dict:
 # ---------------------------------------------------------------- demos and dataset
 
 
-def kept_episodes(root: Path) -> int:
-    from realm_ms.lerobot.export import read_sidecar
-
-    return sum(bool(rec.get("kept")) for rec in read_sidecar(root))
-
-
 def export_demos(r: Recipe, jobs: list[tuple[str, str, int, int, Path]]) -> list[Path]:
-    """Expert demos, one `realm export` process per (task, perturbation, episodes, seed, root), in parallel;
-    a progress bar over the kept episodes of all of them."""
-    from tqdm import tqdm
+    """Expert demos, one `realm export` per (task, perturbation, episodes, seed, root), each over
+    ``r.workers`` env processes (`realm export --workers`, the eval driver's own pool; with one worker
+    the episodes run in this process, beside the evaluations' renderer)."""
+    import torch
 
-    procs = []
-    for task, pert, n, seed, root in jobs:
-        root.parent.mkdir(parents=True, exist_ok=True)
-        cmd = realm_command() + [
-            "export", "--tasks", task, "--perturbations", pert, "--episodes", str(n), "--seed", str(seed),
-            "--width", str(r.width), "--height", str(r.height), "--max-steps", str(r.demo_max_steps),
-            "--out", str(root), "--repo-id", f"realm/{root.name}", "--no-progress"] + (["--success-only"] if r.success_only else [])
-        log = open(root.parent / f"{root.name}.log", "a")
-        procs.append((subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=child_env(), cwd=ROOT), log, root))
-    total = sum(j[2] for j in jobs)
-    with tqdm(total=total, desc="expert demos", unit="ep") as bar:
-        while True:
-            done = [p.poll() is not None for p, _, _ in procs]
-            bar.n = min(total, sum(kept_episodes(root) for _, _, root in procs))
-            bar.refresh()
-            if all(done):
-                break
-            time.sleep(2)
-    for p, log, root in procs:
-        log.close()
-        if p.returncode != 0:
-            raise SystemExit(f"realm export into {root} failed (exit {p.returncode}); see {root.parent / (root.name + '.log')}")
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        for task, pert, n, seed, root in jobs:
+            root.parent.mkdir(parents=True, exist_ok=True)
+            rc = realm(["export", "--tasks", task, "--perturbations", pert, "--episodes", str(n), "--seed", str(seed),
+                        "--width", str(r.width), "--height", str(r.height), "--max-steps", str(r.demo_max_steps),
+                        "--workers", str(r.workers), "--out", str(root), "--repo-id", f"realm/{root.name}"]
+                       + (["--success-only"] if r.success_only else []))
+            if rc != 0:
+                raise SystemExit(f"realm export into {root} failed (exit {rc})")
+    finally:
+        torch.set_num_threads(threads)
     return [j[4] for j in jobs]
 
 
@@ -422,7 +401,7 @@ def parse(argv=None) -> Recipe:
     ap.add_argument("--device", default="cpu", help="torch device for training and the policy: cpu | cuda")
     ap.add_argument("--threads", type=integer(1), default=None, help="torch CPU threads for training (default: all cores)")
     ap.add_argument("--steps", type=integer(1), default=None, help="training steps (default 2000; --quick 2)")
-    ap.add_argument("--workers", type=integer(1), default=None, help="parallel env processes for realm eval (default 2)")
+    ap.add_argument("--workers", type=integer(1), default=None, help="parallel env processes for realm eval and realm export (default 2)")
     ap.add_argument("--batch-size", type=integer(1), default=None, help="training batch size (default 16)")
     ap.add_argument("--camera-size", default=None, metavar="WxH",
                     help="camera size of the demos, training and eval (default 64x48; 128x96 localises better, ~4x the compute)")

@@ -22,12 +22,12 @@ def pytest_addoption(parser):
 #: the files that take minutes (a trained checkpoint, diagnose and fit runs, renders), longest first:
 #: the workers start on them, so that the suite does not end with one worker running a long file
 #: alone while the other idles (`make test` passes --no-loadscope-reorder, so this is the schedule)
-LONG_FILES = ("sysid/test_droid_formats.py", "lerobot/test_export.py", "sysid/test_sysid_cli.py", "sysid/test_hidden.py",
-              "bad_inputs/test_bad_inputs.py", "lerobot/test_example.py", "sysid/test_optimize.py", "expert/test_expert.py",
-              "sysid/test_effects.py", "eval/test_installed_cli.py", "perturbations/test_perturbations_env.py",
-              "tasks/test_env_pick_apple.py", "perturbations/test_physics_neutral.py", "eval/test_policy_latency.py",
-              "eval/test_batched.py", "assets/test_pipeline.py", "eval/test_e2e.py", "sysid/test_torque.py",
-              "lerobot/test_policy_transfer.py", "sysid/test_reference_mujoco.py", "tasks/test_envs.py")
+LONG_FILES = ("sysid/test_droid_formats.py", "lerobot/test_export.py", "bad_inputs/test_bad_inputs.py", "sysid/test_sysid_cli.py",
+              "expert/test_expert.py", "lerobot/test_example.py", "perturbations/test_perturbations_env.py",
+              "tasks/test_env_pick_apple.py", "perturbations/test_physics_neutral.py", "sysid/test_optimize.py",
+              "eval/test_e2e.py", "sysid/test_torque.py", "sysid/test_effects.py", "lerobot/test_policy_transfer.py",
+              "sysid/test_reference_mujoco.py", "eval/test_installed_cli.py", "sysid/test_link_mass.py", "sysid/test_hidden.py",
+              "eval/test_policy_latency.py", "eval/test_batched.py", "assets/test_pipeline.py", "tasks/test_envs.py")
 
 
 def _start_rank(item) -> int:

@@ -45,12 +45,14 @@ def _inline_and_batched(tmp_path, args):
     return _records(tmp_path / "inline" / "records.jsonl"), _records(tmp_path / "batched" / "records.jsonl")
 
 
-@pytest.mark.parametrize("policy,max_steps,perturbations", [("zero", "20", ["Default", "VB-POSE"]), ("expert", "100", ["Default"])])
-def test_batched_cpu_records_equal_inline(tmp_path, policy, max_steps, perturbations):
-    inline, batched = _inline_and_batched(tmp_path, ["--policy", policy, "--tasks", *TASKS, "--perturbations", *perturbations, "--episodes", "2",
-                                                     "--max-steps", max_steps])
+# zero: 2 episodes per cell, so each of the 2 slots runs several episodes and switches cells; expert: one
+# episode per task is enough for the early stop after success (the long, costly episodes)
+@pytest.mark.parametrize("policy,max_steps,perturbations,episodes", [("zero", "20", ["Default", "VB-POSE"], 2), ("expert", "100", ["Default"], 1)])
+def test_batched_cpu_records_equal_inline(tmp_path, policy, max_steps, perturbations, episodes):
+    inline, batched = _inline_and_batched(tmp_path, ["--policy", policy, "--tasks", *TASKS, "--perturbations", *perturbations,
+                                                     "--episodes", str(episodes), "--max-steps", max_steps])
     # success, progression, stages, steps, quality, drawn perturbation parameters: all equal
-    assert len(inline) == 4 * len(perturbations) and inline == batched
+    assert len(inline) == len(TASKS) * len(perturbations) * episodes and inline == batched
     if policy == "expert":  # the expert succeeds and the episode stops 15 steps after success, before max steps
         assert all(r["success"] and r["stalled_stage"] == "DONE" and r["steps"] < 100 for r in batched.values())
 

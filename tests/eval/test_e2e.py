@@ -54,14 +54,19 @@ def test_openpi_server_in_process(tmp_path):
     _check_run(out, "openpi:")
 
 
-def test_dead_openpi_server_fails_episodes_not_the_run(tmp_path):
-    """Every episode is attempted and recorded as an error; the command then exits 1 (not 0)."""
+def test_dead_openpi_server_fails_episodes_not_the_run(tmp_path, capsys):
+    """Every episode is attempted and recorded as an error; the command then exits 1 (not 0) and says
+    where the errors are; each error is shown live, as it happened."""
     out = tmp_path / "run_dead"
+    capsys.readouterr()
     assert main(["eval", "--policy", "openpi:127.0.0.1:9", "--openpi-wait", "0.5", "--tasks", TASKS[1], "--perturbations", "Default", "--episodes", "2",
                  "--max-steps", "12", "--workers", "1", "--camera-size", "64x36", "--no-progress", "--out", str(out)]) == 1
     recs = [json.loads(line) for line in (out / "records.jsonl").read_text().splitlines()]
     assert len(recs) == 2 and all(r["status"] == "error" and "unreachable" in r["error"] for r in recs)
     assert json.loads((out / "metrics.json").read_text())["overall"]["episodes"] == 0
+    err = capsys.readouterr().err
+    assert "2 episode(s) ended in an error record" in err and str(out / "records.jsonl") in err
+    assert f"error: {TASKS[1]} x Default seed 1234" in err and f"error: {TASKS[1]} x Default seed 1235" in err
 
 
 def test_expert_through_eval_reaches_success(tmp_path):

@@ -93,6 +93,7 @@ def test_installed_realm_eval_with_two_workers_makes_every_env(tmp_path):
         assert noise not in r.stderr, noise
 
 
+@pytest.mark.slow  # its messages and exit 1 are checked in-process by test_e2e's dead-openpi test
 @needs_script
 def test_a_run_with_an_error_record_exits_nonzero_and_says_where(tmp_path):
     import socket

@@ -253,7 +253,7 @@ def test_binary_gripper_labels_keep_the_episode_and_binarise_the_grasp(tmp_path,
     from realm_ms.cli import main
     from realm_ms.lerobot.export import ExportConfig, export_dataset, read_sidecar
 
-    steps = 75  # the expert starts closing on the apple around step 50
+    steps = 62  # seed 3: the expert starts closing on the apple at step 55 (0.03, 0.06, ...): 7 closing frames
     out = {}
     for labels in ("command", "binary"):
         cfg = ExportConfig(out=tmp_path / labels, tasks=[TASKS[0]], seed=3, width=32, height=24, max_steps=steps,

@@ -40,8 +40,11 @@ def truth(request, tmp_path_factory):
     pytest.importorskip("lerobot")
     space = request.param
     out = tmp_path_factory.mktemp(f"truth_{space}")
-    synth_droid(HIDDEN, out, SynthConfig(noise_rad=NOISE, n_train=2, n_heldout=1, duration_s=4.0, engine="mujoco"),
-                space, FORMATS, log_joint_target=True)
+    # the fit's size only where a fit reads it (FIT_FAST, or every space under --run-slow); the
+    # read-back needs no length, and the MuJoCo synth costs per second of log
+    fits = space == FIT_FAST or request.config.getoption("--run-slow")
+    size = dict(n_train=2, n_heldout=1, duration_s=4.0) if fits else dict(n_train=1, n_heldout=1, duration_s=2.0)
+    synth_droid(HIDDEN, out, SynthConfig(noise_rad=NOISE, engine="mujoco", **size), space, FORMATS, log_joint_target=True)
     for split in ("train", "heldout"):
         write_lerobot(out / "lerobot_export" / split, [read_file(f) for f in sorted((out / "npz" / split).glob("*.npz"))],
                       layout="export")
@@ -151,22 +154,27 @@ def test_bad_droid_logs_get_one_clear_message(tmp_path):
         ReadOptions.parse("rebuild:pose")
 
 
-def test_installed_command_reads_droid_dumps(tmp_path):
-    """The path a user types: `realm sysid synth --droid-space` writes json dumps, `realm sysid
-    compare` reads them with two workers; a bad --command or --rate is one line and exit 2."""
+def test_installed_command_reads_droid_dumps(tmp_path, capsys):
+    """The path a user types: `realm sysid synth --droid-space` writes json dumps, the installed
+    `realm sysid compare` reads them with two workers; a bad --command or --rate is one line and exit 2.
+    (The synth and the bad arguments run in-process through the same ``main``: a started `realm` costs
+    seconds of imports, and the installed script is what the compare checks.)"""
+    from realm_ms.cli import main
+
+    assert main(["sysid", "synth", "--hidden", "none", "--droid-space", "joint_velocity", "--format", "json", "--n-train",
+                 "1", "--n-heldout", "1", "--duration", "3", "--out", str(tmp_path / "d")]) == 0, capsys.readouterr().err
     realm = str(Path(sys.executable).parent / "realm")
-    run = lambda *a: subprocess.run([realm, "sysid", *a], capture_output=True, text=True, timeout=600)  # noqa: E731
-    made = run("synth", "--hidden", "none", "--droid-space", "joint_velocity", "--format", "json", "--n-train", "2",
-               "--n-heldout", "1", "--duration", "3", "--out", str(tmp_path / "d"))
-    assert made.returncode == 0, made.stderr
-    ok = run("compare", str(tmp_path / "d" / "json"), "--workers", "2", "--device", "cpu")
+    ok = subprocess.run([realm, "sysid", "compare", str(tmp_path / "d" / "json"), "--workers", "2", "--device", "cpu"],
+                        capture_output=True, text=True, timeout=600)
     assert ok.returncode == 0, ok.stderr
-    assert "replay of 3 trajectories" in ok.stdout
+    assert "replay of 2 trajectories" in ok.stdout
     for bad, msg in ((("compare", str(tmp_path / "d" / "json"), "--command", "bogus"), "unknown mode 'bogus'"),
                      (("synth", "--hidden", "none", "--droid-space", "joint_velocity", "--rate", "30", "--out",
                        str(tmp_path / "e")), "one sample per command")):
-        r = run(*bad)
-        assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr
+        capsys.readouterr()
+        code = main(["sysid", *bad])
+        err = capsys.readouterr().err
+        assert code == 2 and msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
 
 
 #: the space whose fit `make test` runs (its command is rebuilt through the IK, the longest path);
@@ -300,22 +308,26 @@ def test_near_singular_postures_are_masked_where_the_target_comes_from_ik():
     assert 0.2 < ss.interaction_fraction < 0.8 and f"singular {hit.singular.mean():.1%}" in describe([tr])
 
 
-def test_align_report_on_droid_episodes(tmp_path, ev):
+def test_align_report_on_droid_episodes(tmp_path, ev, capsys):
     """`realm sysid align`: on DROID-format episodes of a robot with a command delay and softer
     gains, the true model's closed-loop replay is mm-close to the data and its lag and response
     match the data's; the nominal robot answers faster (larger b, shorter lag) and misses by more.
     One page with the per-lab table, the overlays and the waterfall; a log too short is left out and said."""
-    synth_droid(HIDDEN, tmp_path, SynthConfig(noise_rad=1e-4, n_train=2, n_heldout=1, duration_s=4.0), "cartesian_position",
+    # 2.5 s episodes (align's three closed-loop replays cost per second of log): truth at ~0.08 mm, the
+    # nominal arm 600x off, b within 0.02 % (seeds 0, 1; 4 s gave the same)
+    synth_droid(HIDDEN, tmp_path, SynthConfig(noise_rad=1e-4, n_train=2, n_heldout=1, duration_s=2.5), "cartesian_position",
                 ("npz",), evaluator=ev)
     data = tmp_path / "npz" / "train"
     (data / "index.json").write_text(json.dumps([{"file": "ep_000.npz", "lab": "LAB_A"}, {"file": "ep_001.npz", "lab": "LAB_B"}]))
     t = np.arange(10) / 15.0
     np.savez(data / "short.npz", t=t, q=np.zeros((10, 7)), cartesian_position_cmd=np.zeros((10, 6)))
-    realm = str(Path(sys.executable).parent / "realm")
-    r = subprocess.run([realm, "sysid", "align", str(data), "--model", str(tmp_path / "truth.yaml"), "--out",
-                        str(tmp_path / "a.html"), "--json", str(tmp_path / "a.json")], capture_output=True, text=True, timeout=900)
-    assert r.returncode == 0, r.stderr
-    assert "left out" in r.stderr and "short.npz" in r.stderr
+    from realm_ms.cli import main  # in-process: the installed script is test_installed_command_reads_droid_dumps's
+
+    code = main(["sysid", "align", str(data), "--model", str(tmp_path / "truth.yaml"), "--out", str(tmp_path / "a.html"),
+                 "--json", str(tmp_path / "a.json")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "left out" in err and "short.npz" in err
     a = json.loads((tmp_path / "a.json").read_text())
     nominal, truth = a["runs"][0]["overall"], a["runs"][-1]["overall"]
     assert [x["label"] for x in a["runs"]] == ["nominal", "+ latency", "truth.yaml"]
@@ -327,7 +339,7 @@ def test_align_report_on_droid_episodes(tmp_path, ev):
     assert "Per lab" in html and "Per-joint overlays" in html and "Waterfall" in html and html.count("<img") >= 3
 
 
-def test_every_verb_sets_a_bad_droid_episode_aside(tmp_path, ev):
+def test_every_verb_sets_a_bad_droid_episode_aside(tmp_path, ev, capsys):
     """A DROID directory with an unreadable and a too-short episode: `realm sysid compare` (as every
     verb reading DATA through ``load_dir``) leaves both out, one warning line each naming the file
     and why, and goes on; with nothing usable left it is one line and exit 2. The workbench's own
@@ -340,18 +352,23 @@ def test_every_verb_sets_a_bad_droid_episode_aside(tmp_path, ev):
 
     with pytest.warns(DataWarning, match="left out"):
         assert [tr.name for tr in load_dir(data)] == ["ep_000"]
-    realm = str(Path(sys.executable).parent / "realm")
-    run = lambda d: subprocess.run([realm, "sysid", "compare", str(d), "--workers", "2", "--device", "cpu"],  # noqa: E731
-                                   capture_output=True, text=True, timeout=600)
-    ok = run(data)
-    assert ok.returncode == 0, ok.stderr
-    left = [line for line in ok.stderr.splitlines() if "left out" in line]
+    from realm_ms.cli import main
+
+    # in-process `main` (the installed script and two workers: test_installed_command_reads_droid_dumps)
+    def run(d):
+        capsys.readouterr()
+        code = main(["sysid", "compare", str(d), "--workers", "1", "--device", "cpu"])
+        return code, capsys.readouterr()
+
+    code, ok = run(data)
+    assert code == 0, ok.err
+    left = [line for line in ok.err.splitlines() if "left out" in line]
     assert len(left) == 2 and "broken.npz: not an .npz archive" in left[0] and "short.npz: only 10 samples" in left[1]
-    assert "replay of 1 trajectories" in ok.stdout
+    assert "replay of 1 trajectories" in ok.out
     (data / "ep_000.npz").unlink()
-    bad = run(data)
-    assert bad.returncode == 2 and "no usable episode" in bad.stderr and "Traceback" not in bad.stderr
-    assert len(bad.stderr.strip().splitlines()) == 1
+    code, bad = run(data)
+    assert code == 2 and "no usable episode" in bad.err and "Traceback" not in bad.err
+    assert len(bad.err.strip().splitlines()) == 1
     wb = tmp_path / "wb"
     wb.mkdir()
     (wb / "broken.npz").write_text("not an archive")

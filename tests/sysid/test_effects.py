@@ -68,8 +68,9 @@ def sim():
 def commands():
     from realm_ms.sysid.excite import ExciteConfig, excite
 
+    # 2 s of the 3 s excitation (a rollout costs per physics tick, the lugre and smooth friction steps most)
     cmds = excite(3, seed=1, config=ExciteConfig(duration_s=3.0))
-    steps = 360
+    steps = 240
     k = np.minimum((np.arange(steps) / 120 * 15 + 1e-9).astype(int), cmds[0].shape[0] - 1)
     cmd = np.stack([c[k] for c in cmds])
     return cmd[:, 0].copy(), cmd
