@@ -28,6 +28,7 @@ Stages (each resumes: rerunning the same command skips finished work):
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import os
@@ -112,7 +113,7 @@ def stage(msg: str) -> None:
     print(f"\n=== {msg}", flush=True)
 
 
-def child_env(threads: int | None = 1) -> dict:
+def child_env(threads: int | None) -> dict:
     """Environment of the `lerobot-train` process; ``threads``: its torch CPU threads."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
                MS_SKIP_ASSET_DOWNLOAD_PROMPT="1")
@@ -128,21 +129,15 @@ def export_demos(r: Recipe, jobs: list[tuple[str, str, int, int, Path]]) -> list
     """Expert demos, one `realm export` per (task, perturbation, episodes, seed, root), each over
     ``r.workers`` env processes (`realm export --workers`, the eval driver's own pool; with one worker
     the episodes run in this process, beside the evaluations' renderer)."""
-    import torch
-
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        for task, pert, n, seed, root in jobs:
-            root.parent.mkdir(parents=True, exist_ok=True)
+    for task, pert, n, seed, root in jobs:
+        root.parent.mkdir(parents=True, exist_ok=True)
+        with one_torch_thread():
             rc = realm(["export", "--tasks", task, "--perturbations", pert, "--episodes", str(n), "--seed", str(seed),
                         "--width", str(r.width), "--height", str(r.height), "--max-steps", str(r.demo_max_steps),
                         "--workers", str(r.workers), "--out", str(root), "--repo-id", f"realm/{root.name}"]
                        + (["--success-only"] if r.success_only else []))
-            if rc != 0:
-                raise SystemExit(f"realm export into {root} failed (exit {rc})")
-    finally:
-        torch.set_num_threads(threads)
+        if rc != 0:
+            raise SystemExit(f"realm export into {root} failed (exit {rc})")
     return [j[4] for j in jobs]
 
 
@@ -267,7 +262,6 @@ def realm(argv: list[str], quiet: bool = False) -> int:
     """The ``realm`` command with ``argv``, run in this process: the same parser and code as the installed
     script, while the imports and the renderer (whose first picture costs seconds on a CPU) are paid
     once for every evaluation of the recipe instead of once per command."""
-    import contextlib
     import io
 
     from realm_ms.cli import main as realm_main
@@ -276,21 +270,27 @@ def realm(argv: list[str], quiet: bool = False) -> int:
         return realm_main(argv)
 
 
-def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episodes: int, seed: int = 0) -> Path:
-    """`realm eval` of the checkpoint into ``run`` (resumes it); the policy on one torch thread, as the
-    env processes beside it run on the other cores."""
+@contextlib.contextmanager
+def one_torch_thread():
+    """This process's torch on one CPU thread while the env processes beside it run on the other cores."""
     import torch
 
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
+def evaluate(r: Recipe, ckpt: Path, run: Path, perturbations: list[str], episodes: int, seed: int = 0) -> Path:
+    """`realm eval` of the checkpoint into ``run`` (resumes it); the policy on one torch thread."""
+    with one_torch_thread():
         rc = realm([
             "eval", "--policy", f"lerobot:{ckpt}", "--tasks", *r.tasks, "--perturbations", *perturbations,
             "--episodes", str(episodes), "--seed", str(seed), "--max-steps", str(r.eval_max_steps),
             "--replan-every", str(r.replan_every), "--workers", str(r.workers), "--camera-size", f"{r.width}x{r.height}",
             "--device", r.device, "--out", str(run)])
-    finally:
-        torch.set_num_threads(threads)
     if rc != 0:
         raise SystemExit(f"realm eval into {run} failed (exit {rc})")
     return run

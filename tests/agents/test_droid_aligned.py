@@ -69,7 +69,7 @@ def test_realm_eval_takes_a_named_robot_model_and_records_it(tmp_path):
 
 def test_a_bad_robot_model_flag_is_one_line_and_exit_code_2(tmp_path, capsys):
     # the installed command for eval; export's flag goes through the same CLI code in this process
-    # (the installed `realm export` is tests/lerobot/test_export.py's)
+    # (the installed `realm export` is the bad-input corpus's `export-out-is-file`)
     from realm_ms.cli import main
 
     bad = ["--robot-model", "nope-model", "--out", str(tmp_path / "o")]

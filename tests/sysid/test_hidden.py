@@ -4,10 +4,10 @@ documented confound pair), fitting it brings the held-out RMSE to <= 1.5x the no
 no hidden effect yields "no missing effect".
 
 ``make test`` runs a fast subset (small data: a hidden command ramp against its look-alikes, and
-the null case on 3 + 2 trajectories x 2 s at 100 Hz; a hidden delay diagnosed, fitted and stepped through ``auto`` is the installed
-command's test, ``tests/sysid/test_sysid_cli.py``); ``make test-slow`` the same delay on this
-file's small data, and the sweep over every effect x 3 seeds x {15 Hz, 100 Hz} logging, two-effect
-pairs and the null case at the bench size (7 + 3 trajectories x 10 s).
+the null case on 3 + 2 trajectories x 2 s at 100 Hz; a hidden delay diagnosed, fitted and stepped
+through ``auto`` is the CLI's test, ``tests/sysid/test_sysid_cli.py``); ``make test-slow`` the same
+delay on this file's small data, and the sweep over every effect x 3 seeds x {15 Hz, 100 Hz}
+logging, two-effect pairs and the null case at the bench size (7 + 3 trajectories x 10 s).
 """
 
 from __future__ import annotations
