@@ -24,6 +24,17 @@ NOISE = 2e-4
 SMALL = dict(n_train=1, n_heldout=1, duration_s=3.0)
 
 
+def sysid(capsys, *argv) -> tuple[int, str, str]:
+    """`realm sysid ARGV` in this process (the installed script's own ``main``; a started `realm` costs
+    seconds of imports): exit code, stdout and stderr of this call alone."""
+    from realm_ms.cli import main
+
+    capsys.readouterr()
+    code = main(["sysid", *map(str, argv)])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
 @pytest.fixture(scope="module")
 def ev():
     e = Evaluator(workers=1, device="cpu")
@@ -159,10 +170,9 @@ def test_installed_command_reads_droid_dumps(tmp_path, capsys):
     `realm sysid compare` reads them with two workers; a bad --command or --rate is one line and exit 2.
     (The synth and the bad arguments run in-process through the same ``main``: a started `realm` costs
     seconds of imports, and the installed script is what the compare checks.)"""
-    from realm_ms.cli import main
-
-    assert main(["sysid", "synth", "--hidden", "none", "--droid-space", "joint_velocity", "--format", "json", "--n-train",
-                 "1", "--n-heldout", "1", "--duration", "3", "--out", str(tmp_path / "d")]) == 0, capsys.readouterr().err
+    code, _, err = sysid(capsys, "synth", "--hidden", "none", "--droid-space", "joint_velocity", "--format", "json",
+                         "--n-train", 1, "--n-heldout", 1, "--duration", 3, "--out", tmp_path / "d")
+    assert code == 0, err
     realm = str(Path(sys.executable).parent / "realm")
     ok = subprocess.run([realm, "sysid", "compare", str(tmp_path / "d" / "json"), "--workers", "2", "--device", "cpu"],
                         capture_output=True, text=True, timeout=600)
@@ -171,9 +181,7 @@ def test_installed_command_reads_droid_dumps(tmp_path, capsys):
     for bad, msg in ((("compare", str(tmp_path / "d" / "json"), "--command", "bogus"), "unknown mode 'bogus'"),
                      (("synth", "--hidden", "none", "--droid-space", "joint_velocity", "--rate", "30", "--out",
                        str(tmp_path / "e")), "one sample per command")):
-        capsys.readouterr()
-        code = main(["sysid", *bad])
-        err = capsys.readouterr().err
+        code, _, err = sysid(capsys, *bad)
         assert code == 2 and msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
 
 
@@ -321,11 +329,9 @@ def test_align_report_on_droid_episodes(tmp_path, ev, capsys):
     (data / "index.json").write_text(json.dumps([{"file": "ep_000.npz", "lab": "LAB_A"}, {"file": "ep_001.npz", "lab": "LAB_B"}]))
     t = np.arange(10) / 15.0
     np.savez(data / "short.npz", t=t, q=np.zeros((10, 7)), cartesian_position_cmd=np.zeros((10, 6)))
-    from realm_ms.cli import main  # in-process: the installed script is test_installed_command_reads_droid_dumps's
-
-    code = main(["sysid", "align", str(data), "--model", str(tmp_path / "truth.yaml"), "--out", str(tmp_path / "a.html"),
-                 "--json", str(tmp_path / "a.json")])
-    err = capsys.readouterr().err
+    # in-process: the installed script is test_installed_command_reads_droid_dumps's
+    code, _, err = sysid(capsys, "align", data, "--model", tmp_path / "truth.yaml", "--out", tmp_path / "a.html",
+                         "--json", tmp_path / "a.json")
     assert code == 0, err
     assert "left out" in err and "short.npz" in err
     a = json.loads((tmp_path / "a.json").read_text())
@@ -352,23 +358,17 @@ def test_every_verb_sets_a_bad_droid_episode_aside(tmp_path, ev, capsys):
 
     with pytest.warns(DataWarning, match="left out"):
         assert [tr.name for tr in load_dir(data)] == ["ep_000"]
-    from realm_ms.cli import main
-
-    # in-process `main` (the installed script and two workers: test_installed_command_reads_droid_dumps)
-    def run(d):
-        capsys.readouterr()
-        code = main(["sysid", "compare", str(d), "--workers", "1", "--device", "cpu"])
-        return code, capsys.readouterr()
-
-    code, ok = run(data)
-    assert code == 0, ok.err
-    left = [line for line in ok.err.splitlines() if "left out" in line]
+    # in-process (the installed script and two workers: test_installed_command_reads_droid_dumps)
+    compare = ("compare", data, "--workers", 1, "--device", "cpu")
+    code, out, err = sysid(capsys, *compare)
+    assert code == 0, err
+    left = [line for line in err.splitlines() if "left out" in line]
     assert len(left) == 2 and "broken.npz: not an .npz archive" in left[0] and "short.npz: only 10 samples" in left[1]
-    assert "replay of 1 trajectories" in ok.out
+    assert "replay of 1 trajectories" in out
     (data / "ep_000.npz").unlink()
-    code, bad = run(data)
-    assert code == 2 and "no usable episode" in bad.err and "Traceback" not in bad.err
-    assert len(bad.err.strip().splitlines()) == 1
+    code, _, err = sysid(capsys, *compare)
+    assert code == 2 and "no usable episode" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
     wb = tmp_path / "wb"
     wb.mkdir()
     (wb / "broken.npz").write_text("not an archive")
